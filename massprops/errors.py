@@ -1,0 +1,78 @@
+"""The exception hierarchy: one root, one branch per exit code of the contract.
+
+The mapping to exit codes lives in exactly one place, ``EXIT_CODES`` below, and the CLI is its only
+reader. Subclasses also inherit the builtin a Python caller would expect (``OSError`` for files,
+``ValueError`` for bad data), so ``except ValueError`` keeps working for library users.
+"""
+
+from __future__ import annotations
+
+
+class MassPropsError(Exception):
+    """Root of every error massprops raises on purpose."""
+
+
+# --- exit 1: an input could not be processed -----------------------------------------------------
+class InputError(MassPropsError):
+    """An input (mesh file, scene file, option value read from a file) cannot be used."""
+
+
+class MeshFileError(InputError, OSError):
+    """The file cannot be opened or read: missing, a directory, no permission."""
+
+
+class MeshFormatError(InputError, ValueError):
+    """The bytes are not a valid mesh of the format: garbage, truncated, bad indices, NaN."""
+
+
+class UnknownFormatError(InputError, ValueError):
+    """No reader or writer for this file extension or ``--input-format``."""
+
+
+class MeshTopologyError(InputError, ValueError):
+    """The mesh is not a closed oriented surface (open, non-manifold, un-orientable)."""
+
+
+class DegenerateMeshError(InputError, ValueError):
+    """The mesh encloses no volume (flat, empty) or its inertia is unphysical."""
+
+
+class SceneError(InputError, ValueError):
+    """The scene YAML is invalid; the message names the key path and, where known, the line."""
+
+
+class OutputExistsError(InputError, FileExistsError):
+    """The output file exists (use --force) or would overwrite an input."""
+
+
+# --- exit 2: usage ---------------------------------------------------------------------------------
+class UsageError(MassPropsError, ValueError):
+    """Options that contradict each other or are out of range (exit 2)."""
+
+
+# --- exit 3: the computation itself failed ---------------------------------------------------------
+class ComputationError(MassPropsError, ArithmeticError):
+    """The computation failed although its inputs were valid (exit 3)."""
+
+
+class DivergenceError(ComputationError):
+    """An integration produced NaN or grew without bound."""
+
+
+#: The contract's exit-code table. Most specific class first is not needed: the branches are disjoint.
+EXIT_CODES: dict[type[MassPropsError], int] = {
+    InputError: 1,
+    UsageError: 2,
+    ComputationError: 3,
+}
+EXIT_INTERRUPTED = 130
+
+
+def exit_code(exc: BaseException) -> int:
+    """Exit code of the contract for an exception reaching the command boundary."""
+    if isinstance(exc, KeyboardInterrupt):
+        return EXIT_INTERRUPTED
+    for cls, code in EXIT_CODES.items():
+        if isinstance(exc, cls):
+            return code
+    return 1
