@@ -37,6 +37,11 @@ class DegenerateMeshError(InputError, ValueError):
     """The mesh encloses no volume (flat, empty) or its inertia is unphysical."""
 
 
+class UnphysicalInertiaError(InputError, ValueError):
+    """An inertia tensor that no body can have: not symmetric, not positive definite, or a
+    principal moment larger than the sum of the other two (triangle inequality)."""
+
+
 class SceneError(InputError, ValueError):
     """The scene YAML is invalid; the message names the key path and, where known, the line."""
 

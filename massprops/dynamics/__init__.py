@@ -1,0 +1,1 @@
+"""Newton-Euler dynamics of one rigid body: scene, forces, integrators, exact solutions."""
