@@ -1,0 +1,192 @@
+"""The ``massprops`` command: parse options, call one library function, render, map errors to exits.
+
+Imports of anything heavier than click happen inside the commands, so that ``inspect --json`` on
+a small mesh pays for numpy and the mesh code only (no rich, scipy, trimesh or numba).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from collections.abc import Callable, Iterable
+from typing import Any
+
+import click
+
+from massprops import __version__
+from massprops.errors import MassPropsError, UsageError, exit_code
+
+UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")  # same keys as massprops.io.UNITS (tested)
+
+
+def _say_error(message: str) -> None:
+    click.echo(f"massprops: error: {message}", err=True)
+
+
+def _say_warning(name: str, message: str) -> None:
+    click.echo(f"massprops: warning: {name}: {message}", err=True)
+
+
+def _guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
+    """Run ``fn``; turn any exception into one stderr line and the contract's exit code."""
+    try:
+        fn()
+        return 0
+    except KeyboardInterrupt:
+        raise
+    except MassPropsError as exc:
+        if ctx.obj.get("debug"):
+            raise
+        _say_error(str(exc))
+        return exit_code(exc)
+    except Exception as exc:  # a bug or an environment failure: say what, not a traceback
+        if ctx.obj.get("debug"):
+            raise
+        if isinstance(exc, OSError):
+            _say_error(f"{exc.filename or ''}: {exc.strerror or exc}".lstrip(": "))
+            return 1
+        _say_error(f"internal error: {type(exc).__name__}: {exc} (run with --debug for details)")
+        return 3
+
+
+def _emit_json(obj: dict) -> None:
+    # allow_nan=False: a NaN reaching the output is a bug to surface, never a number to print
+    click.echo(json.dumps(obj, allow_nan=False))
+
+
+def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    import math
+
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise click.BadParameter(f"must be a positive finite number, got {value!r}")
+    return value
+
+
+def mass_options(f: Callable) -> Callable:
+    """--density / --mass / --unit / --allow-open / --input-format, shared by inspect and align."""
+    for opt in reversed([
+        click.option("--density", type=float, callback=_positive,
+                     help="Density in kg/m³ (default 1)."),
+        click.option("--mass", "total_mass", type=float, callback=_positive,
+                     help="Total mass in kg; the density follows from the volume."),
+        click.option("--unit", type=click.Choice(UNIT_CHOICES), default="m", show_default=True,
+                     help="Unit of the file's coordinates; results are always SI."),
+        click.option("--allow-open", is_flag=True,
+                     help="Compute an open mesh anyway (the result is then ill-defined; "
+                          "warnings say by how much)."),
+        click.option("--input-format", default=None,
+                     help="Format of the input (required for '-' = standard input)."),
+    ]):
+        f = opt(f)
+    return f
+
+
+def _check_mass_options(density: float | None, total_mass: float | None) -> None:
+    if density is not None and total_mass is not None:
+        raise click.UsageError("give --density or --mass, not both")
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="massprops")
+@click.option("--debug", is_flag=True, help="Show tracebacks instead of one-line errors.")
+@click.pass_context
+def cli(ctx: click.Context, debug: bool) -> None:
+    """Mass properties and rigid-body dynamics of closed meshes (SI units)."""
+    ctx.ensure_object(dict)
+    ctx.obj["debug"] = debug
+
+
+@cli.command()
+@click.argument("meshes", nargs=-1, required=True)
+@mass_options
+@click.option("--json", "as_json", is_flag=True, help="One JSON object per mesh, one per line.")
+@click.pass_context
+def inspect(ctx: click.Context, meshes: tuple[str, ...], density: float | None,
+            total_mass: float | None, unit: str, allow_open: bool, input_format: str | None,
+            as_json: bool) -> None:
+    """Mass, centre of mass, inertia tensor, principal moments and axes of each MESH.
+
+    MESH is a file (OBJ, STL, .vf/.vtx/.fac, PLY, OFF, ...) or '-' for standard input.
+    """
+    _check_mass_options(density, total_mass)
+    if "-" in meshes and input_format is None:
+        raise click.UsageError("reading standard input ('-') needs --input-format")
+    from massprops.analysis import inspect_file
+
+    def one(path: str) -> None:
+        source = sys.stdin.buffer if path == "-" else path
+        result = inspect_file(source, format=input_format, unit=unit,
+                              name="<stdin>" if path == "-" else path,
+                              density=density, mass=total_mass, allow_open=allow_open)
+        for w in result.warnings:
+            _say_warning(result.mesh.name, w)
+        if as_json:
+            _emit_json(result.as_dict())
+        else:
+            from massprops.report import print_inspection
+
+            print_inspection(result)
+
+    ctx.exit(_worst(ctx, meshes, one))
+
+
+@cli.command()
+@click.argument("input_path", metavar="IN")
+@click.argument("output_path", metavar="OUT")
+@mass_options
+@click.option("--force", is_flag=True, help="Replace OUT if it exists (never IN).")
+@click.option("--json", "as_json", is_flag=True, help="Print the applied map as JSON.")
+@click.pass_context
+def align(ctx: click.Context, input_path: str, output_path: str, density: float | None,
+          total_mass: float | None, unit: str, allow_open: bool, input_format: str | None,
+          force: bool, as_json: bool) -> None:
+    """Write OUT: the mesh IN moved into its principal frame (COM at the origin, axes along the
+    principal axes, ascending moments). Faces and winding are unchanged."""
+    _check_mass_options(density, total_mass)
+
+    def run() -> None:
+        from massprops.align import align_mesh
+        from massprops.analysis import inspect_file
+        from massprops.io import write_mesh
+
+        result = inspect_file(input_path, format=input_format, unit=unit, density=density,
+                              mass=total_mass, allow_open=allow_open)
+        for w in result.warnings:
+            _say_warning(result.mesh.name, w)
+        aligned = align_mesh(result.mesh, result.properties)
+        write_mesh(aligned.mesh, output_path, force=force, protect=(input_path,))
+        if as_json:
+            _emit_json({"input": input_path, "output": output_path, **aligned.as_dict()})
+        else:
+            from massprops.report import print_alignment
+
+            print_alignment(input_path, output_path, aligned)
+
+    ctx.exit(_guarded(ctx, run))
+
+
+def _worst(ctx: click.Context, items: Iterable[str], fn: Callable[[str], None]) -> int:
+    """Run ``fn`` on each item, reporting each failure; the exit code is the worst one."""
+    worst = 0
+    for item in items:
+        worst = max(worst, _guarded(ctx, lambda item=item: fn(item)))
+    return worst
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point: click's own usage errors exit 2; Ctrl-C exits 130 without a traceback."""
+    try:
+        # non-standalone: click returns ctx.exit's code instead of exiting itself
+        code = cli.main(args=argv, prog_name="massprops", standalone_mode=False)
+    except click.ClickException as exc:
+        exc.show()
+        sys.exit(exc.exit_code)
+    except click.exceptions.Abort:
+        sys.exit(130)
+    except KeyboardInterrupt:
+        click.echo("massprops: interrupted", err=True)
+        sys.exit(130)
+    except UsageError as exc:
+        _say_error(str(exc))
+        sys.exit(2)
+    sys.exit(code if isinstance(code, int) else 0)

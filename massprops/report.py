@@ -1,0 +1,102 @@
+"""Human-readable output (rich): the inspect table in the spirit of the notes' slide 14.
+
+Only the CLI imports this module; the library never prints. Numbers are shown with the digits
+their error bar justifies (at most 15 significant), so an exact 12 prints as 12 and a round-off
+residue below its bound prints as 0. --json output is never rounded.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from rich.console import Console, Group
+from rich.table import Table
+from rich.text import Text
+
+_console = Console(highlight=False)
+
+
+def fmt(value: float, error: float = 0.0) -> str:
+    """``value`` with the significant digits that ``error`` (an absolute bound) leaves certain."""
+    if not math.isfinite(value):
+        return str(value)
+    if value == 0 or abs(value) <= error:
+        return "0"
+    digits = 15
+    if error > 0:
+        digits = max(1, min(15, 1 + int(math.floor(math.log10(abs(value) / error)))))
+    return f"{value:.{digits}g}"
+
+
+def _matrix(m: np.ndarray, err: np.ndarray | float, title: str) -> Table:
+    err = np.broadcast_to(np.asarray(err, dtype=float), m.shape)
+    t = Table(title=title, show_header=False, box=None, padding=(0, 2), title_justify="left")
+    for i in range(m.shape[0]):
+        t.add_row(*(fmt(float(m[i, j]), float(err[i, j])) for j in range(m.shape[1])))
+    return t
+
+
+def _vector(v: np.ndarray, err: np.ndarray | float) -> str:
+    err = np.broadcast_to(np.asarray(err, dtype=float), v.shape)
+    return "(" + ", ".join(fmt(float(x), float(e)) for x, e in zip(v, err)) + ")"
+
+
+def _bar(e: np.ndarray | float) -> str:
+    return f"± {float(np.max(e)):.1e}"
+
+
+def inspection_renderable(result) -> Group:
+    """A rich renderable for one `massprops.analysis.Inspection`."""
+    p, h = result.properties, result.health
+    rnd, inp = p.uncertainty.rounding, p.uncertainty.input
+
+    def bound(name: str) -> np.ndarray:
+        b = np.asarray(getattr(rnd, name), dtype=float)
+        return b + np.asarray(getattr(inp, name), dtype=float) if inp is not None else b
+
+    head = Table(show_header=True, header_style="bold", box=None, padding=(0, 2),
+                 title=Text(result.mesh.name, style="bold"), title_justify="left")
+    head.add_column("quantity")
+    head.add_column("value")
+    head.add_column("error bar" + (" (round-off + float32 input)" if inp is not None else ""))
+    head.add_row("volume [m³]", fmt(p.volume, float(bound("volume"))), _bar(bound("volume")))
+    head.add_row("mass [kg]", fmt(p.mass, float(bound("mass"))), _bar(bound("mass")))
+    head.add_row("density [kg/m³]", fmt(p.density), "")
+    head.add_row("centre of mass [m]", _vector(p.center_of_mass, bound("center_of_mass")),
+                 _bar(bound("center_of_mass")))
+    head.add_row("principal moments [kg·m²]",
+                 _vector(p.principal_moments, bound("principal_moments")),
+                 _bar(bound("principal_moments")))
+
+    j = _matrix(p.inertia, bound("inertia"),
+                f"inertia tensor about the centre of mass [kg·m²]  {_bar(bound('inertia'))}")
+    axes = _matrix(p.principal_axes, 0.0, "principal axes (columns, mesh frame)")
+
+    mesh = Table(show_header=False, box=None, padding=(0, 2), title="mesh",
+                 title_justify="left")
+    for key, value in h.as_dict().items():
+        if isinstance(value, (list, tuple)):
+            value = ", ".join(fmt(float(v)) if isinstance(v, float) else str(v) for v in value)
+        mesh.add_row(key, str(value))
+
+    parts = [head, Text(""), j, Text(""), axes, Text(""), mesh]
+    if result.warnings:
+        parts.append(Text(""))
+        parts.extend(Text(f"warning: {w}", style="yellow") for w in result.warnings)
+    return Group(*parts, Text(""))
+
+
+def print_inspection(result) -> None:
+    _console.print(inspection_renderable(result))
+
+
+def print_alignment(input_path: str, output_path: str, alignment) -> None:
+    """Summary of `massprops align`: the map written and the moments that are now diagonal."""
+    t = Table(show_header=False, box=None, padding=(0, 2),
+              title=Text(f"{input_path} → {output_path}", style="bold"), title_justify="left")
+    t.add_row("map", "v ↦ rotation · v + translation")
+    t.add_row("translation [m]", _vector(alignment.translation, 0.0))
+    t.add_row("principal moments [kg·m²]", _vector(alignment.principal_moments, 0.0))
+    _console.print(t)
+    _console.print(_matrix(alignment.rotation, 0.0, "rotation (rows: principal axes)"))
