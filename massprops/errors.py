@@ -61,7 +61,14 @@ class ComputationError(MassPropsError, ArithmeticError):
 
 
 class DivergenceError(ComputationError):
-    """An integration produced NaN or grew without bound."""
+    """An integration produced NaN or grew without bound.
+
+    ``partial`` holds what was computed up to the failure (a SimulationResult), so the caller can
+    still write it out."""
+
+    def __init__(self, message: str, partial: object = None) -> None:
+        super().__init__(message)
+        self.partial = partial
 
 
 #: The contract's exit-code table. Most specific class first is not needed: the branches are disjoint.
