@@ -50,12 +50,12 @@ class OutputExistsError(InputError, FileExistsError):
     """The output file exists (use --force) or would overwrite an input."""
 
 
-# --- exit 2: usage ---------------------------------------------------------------------------------
+# --- exit 2: usage -------------------------------------------------------------------------------
 class UsageError(MassPropsError, ValueError):
     """Options that contradict each other or are out of range (exit 2)."""
 
 
-# --- exit 3: the computation itself failed ---------------------------------------------------------
+# --- exit 3: the computation itself failed -------------------------------------------------------
 class ComputationError(MassPropsError, ArithmeticError):
     """The computation failed although its inputs were valid (exit 3)."""
 
@@ -71,7 +71,7 @@ class DivergenceError(ComputationError):
         self.partial = partial
 
 
-#: The contract's exit-code table. Most specific class first is not needed: the branches are disjoint.
+#: The contract's exit-code table; the three branches are disjoint, so order does not matter.
 EXIT_CODES: dict[type[MassPropsError], int] = {
     InputError: 1,
     UsageError: 2,

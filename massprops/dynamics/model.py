@@ -69,7 +69,8 @@ class RigidBody:
             raise UnphysicalInertiaError(f"mass must be a positive finite number, got {mass!r}")
         j = np.array(inertia_com, dtype=np.float64)
         if j.shape != (3, 3) or not np.isfinite(j).all():
-            raise UnphysicalInertiaError(f"inertia must be a finite 3x3 matrix, got shape {j.shape}")
+            raise UnphysicalInertiaError(
+                f"inertia must be a finite 3x3 matrix, got shape {j.shape}")
         scale = float(np.abs(j).max())
         if scale == 0 or np.abs(j - j.T).max() > 1e-12 * scale:
             raise UnphysicalInertiaError("inertia is not symmetric (or is zero)")
@@ -98,7 +99,7 @@ class InitialState:
     angular_velocity_frame: str = "world"  # "world" | "body"
 
 
-# --- forces: each kind is one frozen dataclass; the registry in forces.py maps YAML type -> class ---
+# --- forces: one frozen dataclass per kind; scene.py maps YAML type names to them ---
 @dataclass(frozen=True, eq=False)
 class Gravity:
     """Uniform field g (3,) world, m/s²; acts at the COM (no torque)."""
