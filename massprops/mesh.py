@@ -71,10 +71,11 @@ class Mesh:
                     self.coordinate_scale, self.name)
 
 
-def fan_triangulate(polygons: list[np.ndarray] | list[list[int]]) -> tuple[np.ndarray, np.ndarray | None]:
-    """Fan-triangulate polygons; returns (faces (m, 3) int64, polygon_sizes or None if all triangles).
+def fan_triangulate(polygons: list[np.ndarray] | list[list[int]]
+                    ) -> tuple[np.ndarray, np.ndarray | None]:
+    """Fan-triangulate polygons: (faces (m, 3) int64, polygon_sizes or None if all triangles).
 
-    A polygon with fewer than 3 vertices is the caller's error to report; this function assumes >= 3.
+    Polygons need >= 3 vertices; reporting shorter ones is the reader's job.
     """
     sizes = np.fromiter((len(p) for p in polygons), dtype=np.int64, count=len(polygons))
     if sizes.size and (sizes == 3).all():
