@@ -165,6 +165,133 @@ def align(ctx: click.Context, input_path: str, output_path: str, density: float 
     ctx.exit(_guarded(ctx, run))
 
 
+class RegistryChoice(click.ParamType):
+    """A choice whose values come from a registry, loaded on first use, so that building the
+    command line never imports what only one command needs (numba for the integrators)."""
+
+    name = "choice"
+
+    def __init__(self, loader: Callable[[], tuple[str, ...]]) -> None:
+        self.loader = loader
+
+    def get_metavar(self, *args: Any, **kwargs: Any) -> str:
+        return "[" + "|".join(self.loader()) + "]"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> str:
+        choices = self.loader()
+        if value not in choices:
+            self.fail(f"{value!r} is not one of {', '.join(choices)}", param, ctx)
+        return value
+
+
+def _integrator_names() -> tuple[str, ...]:
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    return ("auto", *sorted(INTEGRATORS))
+
+
+class _Progress:
+    """Progress bar on stderr, shown only on a terminal, not with --quiet, and only once a run
+    has lasted a second (short runs print nothing)."""
+
+    def __init__(self, enabled: bool) -> None:
+        import time
+
+        self.enabled, self.clock, self.start = enabled, time.monotonic, time.monotonic()
+        self.bar: Any = None
+        self.task: Any = None
+
+    def __call__(self, fraction: float) -> None:
+        if not self.enabled:
+            return
+        if self.bar is None and self.clock() - self.start > 1.0:
+            from rich.console import Console
+            from rich.progress import Progress
+
+            self.bar = Progress(console=Console(stderr=True), transient=True)
+            self.bar.start()
+            self.task = self.bar.add_task("integrating", total=1.0)
+        if self.bar is not None:
+            self.bar.update(self.task, completed=fraction)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
+@cli.command()
+@click.argument("scene_path", metavar="SCENE")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object.")
+@click.option("--output", "output_path", default=None,
+              help="Trajectory file (.csv or .npz); overrides the scene's output.file.")
+@click.option("--integrator", type=RegistryChoice(_integrator_names), default=None,
+              help="Overrides the scene's time.integrator.")
+@click.option("--rtol", type=float, callback=_positive, help="Tolerance of adaptive methods.")
+@click.option("--step", type=float, callback=_positive, help="Step of fixed-step methods [s].")
+@click.option("--every", type=float, callback=_positive, help="Sampling interval [s].")
+@click.option("--plot", "plot_path", default=None,
+              help="PNG of angular velocity, energy and angular-momentum drift over time.")
+@click.option("--force", is_flag=True, help="Replace existing output files.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+@click.pass_context
+def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: str | None,
+             integrator: str | None, rtol: float | None, step: float | None,
+             every: float | None, plot_path: str | None, force: bool, quiet: bool) -> None:
+    """Integrate the Newton-Euler equations of the one body in SCENE (YAML, SI units)."""
+    interrupted = []
+
+    def run() -> None:
+        from massprops.dynamics.scene import load_scene
+        from massprops.dynamics.simulate import simulate as run_scene
+        from massprops.errors import DivergenceError
+
+        scene = load_scene(scene_path)
+        for w in scene.warnings:
+            _say_warning(scene.body_source, w)
+        out = output_path or scene.output.file
+        sampling = every or scene.output.every
+        if sampling is None and (out or plot_path):
+            sampling = scene.time.duration / 1000
+        protect = [scene_path, *scene.input_files]
+        progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+        try:
+            result = run_scene(scene, integrator=integrator, rtol=rtol, step=step,
+                               every=sampling, progress=progress)
+        except DivergenceError as exc:  # keep what was computed, then fail with exit 3
+            if out and exc.partial is not None:
+                _save(exc.partial, out, None, force, protect)
+            raise
+        finally:
+            progress.close()
+        _save(result, out, plot_path, force, protect)
+        if as_json:
+            _emit_json(result.as_dict())
+        else:
+            from massprops.report import print_simulation
+
+            print_simulation(scene, result)
+        if result.interrupted:
+            interrupted.append(True)
+
+    code = _guarded(ctx, run)
+    if interrupted and code == 0:
+        click.echo("massprops: interrupted; wrote what was computed", err=True)
+        code = 130
+    ctx.exit(code)
+
+
+def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
+          protect: list) -> None:
+    if trajectory_path:
+        from massprops.dynamics.trajectory import write_trajectory
+
+        write_trajectory(result.trajectory, trajectory_path, force=force, protect=protect)
+    if plot_path:
+        from massprops.dynamics.plots import plot_simulation
+
+        plot_simulation(result, plot_path, force=force, protect=protect)
+
+
 def _worst(ctx: click.Context, items: Iterable[str], fn: Callable[[str], None]) -> int:
     """Run ``fn`` on each item, reporting each failure; the exit code is the worst one."""
     worst = 0

@@ -100,3 +100,27 @@ def print_alignment(input_path: str, output_path: str, alignment) -> None:
     t.add_row("principal moments [kg·m²]", _vector(alignment.principal_moments, 0.0))
     _console.print(t)
     _console.print(_matrix(alignment.rotation, 0.0, "rotation (rows: principal axes)"))
+
+
+def print_simulation(scene, result) -> None:
+    """Summary of `massprops simulate`: method and why, cost, final state, diagnostics."""
+    head = Table(show_header=False, box=None, padding=(0, 2), title_justify="left",
+                 title=Text(scene.source, style="bold"))
+    head.add_row("integrator", f"{result.integrator} ({result.reason})")
+    head.add_row("steps / evaluations", f"{result.steps} / {result.evaluations}"
+                 + (f" ({result.rejected} rejected)" if result.rejected else ""))
+    head.add_row("wall time [s]", f"{result.wall_time_s:.3g} (+ {result.warmup_time_s:.3g} "
+                 "compile/load)")
+    final = result.trajectory.row(-1)
+    head.add_row("t [s]", fmt(final["t"]))
+    for key, unit in (("position", "m"), ("orientation", "w, x, y, z"),
+                      ("velocity", "m/s"), ("angular_velocity", "rad/s, world"),
+                      ("angular_velocity_body", "rad/s, body")):
+        head.add_row(f"{key.replace('_', ' ')} [{unit}]",
+                     "(" + ", ".join(f"{x:.10g}" for x in final[key]) + ")")
+    for key, value in result.diagnostics.items():
+        head.add_row(key.replace("_", " "), "n/a (not conserved here)" if value is None
+                     else f"{value:.3g}")
+    if result.interrupted:
+        head.add_row("interrupted", "yes: the results stop at the time above")
+    _console.print(head)

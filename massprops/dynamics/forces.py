@@ -145,7 +145,7 @@ def quat_matrix(q0, q1, q2, q3):
 
 @njit(cache=True)
 def force_torque(r, v, q, w, active, codes, params):
-    """Total force (world, N) and torque (principal frame, N·m) as a 6-tuple (fx, fy, fz, nx, ny, nz).
+    """Total force (world, N) and torque (principal, N·m): a 6-tuple (fx, fy, fz, nx, ny, nz).
 
     r, v : (3,) world (ignored by rotation-only scenes, which have no r/v-dependent term);
     q : (4,) principal -> world; w : (3,) principal rad/s; active : (k,) bool.

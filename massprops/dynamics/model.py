@@ -81,7 +81,8 @@ class RigidBody:
         if moments[2] > (moments[0] + moments[1]) * (1 + 1e-12):
             raise UnphysicalInertiaError(
                 "inertia violates the triangle inequality: largest principal moment "
-                f"{moments[2]!r} exceeds the sum of the others {moments[0] + moments[1]!r}")
+                f"{float(moments[2])!r} exceeds the sum of the others "
+                f"{float(moments[0] + moments[1])!r}")
         radius = math.sqrt(moments[2] / mass)
         return cls(float(mass), moments, axes, _vec3(center_of_mass, "center_of_mass"),
                    float(size) if size is not None else radius)
@@ -179,7 +180,9 @@ class OutputSettings:
 @dataclass(frozen=True, eq=False)
 class Scene:
     """A whole scene, validated. ``source`` names the file for messages; ``body_source`` says
-    where the mass properties came from (mesh path or "explicit")."""
+    where the mass properties came from (mesh path or "explicit"); ``input_files`` are the files
+    the scene reads (its mesh), which no output may replace; ``warnings`` what the mesh's health
+    check said (a flipped or open mesh)."""
 
     body: RigidBody
     initial: InitialState
@@ -188,3 +191,5 @@ class Scene:
     output: OutputSettings
     source: str = "<scene>"
     body_source: str = "explicit"
+    input_files: tuple[Path, ...] = ()
+    warnings: tuple[str, ...] = ()

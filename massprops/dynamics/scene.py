@@ -9,12 +9,12 @@ last, so a typo elsewhere is reported at once.
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
 import os
 import re
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -31,8 +31,8 @@ from massprops.dynamics.model import (
     RigidBody,
     Scene,
     Spring,
-    Torque,
     TimeSettings,
+    Torque,
 )
 from massprops.errors import InputError, SceneError, UnphysicalInertiaError
 
@@ -53,7 +53,7 @@ _YAML12_FLOAT = re.compile(r"[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?
 _SCALARS = yaml.constructor.SafeConstructor()  # only its int/float/bool scalar readers are used
 
 
-# --- nodes with their key path ---------------------------------------------------------------------
+# --- nodes with their key path ------------------------------------------------------------------
 class _Field:
     """One YAML node and the key path that reached it, so an error can name file, line and key."""
 
@@ -61,6 +61,8 @@ class _Field:
 
     def __init__(self, node: yaml.Node, path: str, source: str) -> None:
         self.node, self.path, self.source = node, path, source
+        if node.tag not in _PLAIN_TAGS:  # every node read is wrapped first, so none escapes this
+            raise self.error(_tag_problem(node.tag))
 
     def child(self, node: yaml.Node, key: str | int) -> _Field:
         if isinstance(key, int):
@@ -74,6 +76,13 @@ class _Field:
 
     def error(self, message: str) -> SceneError:
         return SceneError(_one_line(self.where() + message))
+
+
+def _tag_problem(tag: str) -> str:
+    shown = tag.replace(_TAG, "!!")
+    if shown == "!!merge":
+        return "YAML merge keys (<<) are not supported; write the keys out"
+    return f"unsupported YAML tag {shown!r}: a scene is plain data; remove the tag"
 
 
 def _one_line(text: str) -> str:
@@ -92,7 +101,7 @@ def _shown(node: yaml.Node) -> str:
         return repr(node.value)
     if node.tag == _BOOL:
         return f"{node.value} (a boolean)"
-    return node.value
+    return node.value if len(node.value) <= 40 else node.value[:37] + "..."
 
 
 def _unknown(word: str, known: Sequence[str], what: str) -> str:
@@ -115,9 +124,9 @@ def _mapping(field: _Field, known: Sequence[str],
         raise field.error(f"expected a mapping with keys {', '.join(known)}, got {_shown(node)}")
     out: dict[str, _Field] = {}
     for key_node, value_node in node.value:
+        key_field = _Field(key_node, field.path, field.source)  # refuses a tagged key, e.g. <<
         if not (isinstance(key_node, yaml.ScalarNode) and key_node.tag == _STR):
-            raise _Field(key_node, field.path, field.source).error(
-                f"expected a key name, got {_shown(key_node)}")
+            raise key_field.error(f"expected a key name, got {_shown(key_node)}")
         key = key_node.value
         named = field.child(key_node, key)
         if key not in known:
@@ -153,21 +162,21 @@ def _number(field: _Field) -> float:
     if value is None:
         raise field.error(f"expected a number, got {_shown(node)}")
     if not math.isfinite(value):
-        raise field.error(f"expected a finite number, got {node.value}")
+        raise field.error(f"expected a finite number, got {_shown(node)}")
     return value
 
 
 def _positive(field: _Field) -> float:
     value = _number(field)
     if value <= 0:
-        raise field.error(f"expected a positive number, got {field.node.value}")
+        raise field.error(f"expected a positive number, got {_shown(field.node)}")
     return value
 
 
 def _non_negative(field: _Field) -> float:
     value = _number(field)
     if value < 0:
-        raise field.error(f"expected a non-negative number, got {field.node.value}")
+        raise field.error(f"expected a non-negative number, got {_shown(field.node)}")
     return value
 
 
@@ -230,11 +239,11 @@ def _existing_file(field: _Field, base_dir: Path) -> Path:
 # --- the body -----------------------------------------------------------------------------------
 _EXPLICIT_BODY_KEYS = ("mass", "inertia", "center_of_mass")
 _MESH_BODY_KEYS = ("mesh", "density", "mass", "unit", "allow_open")
-_BODY_EXAMPLE = "body: {mesh: part.obj, density: 7850} or body: {mass: 12.0, inertia: [[8, 0, 0], " \
-                "[0, 13, 0], [0, 0, 13]]}"
+_BODY_EXAMPLE = ("body: {mesh: part.obj, density: 7850} or "
+                 "body: {mass: 12.0, inertia: [[8, 0, 0], [0, 13, 0], [0, 0, 13]]}")
 
 
-@dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True)
 class _MeshBodySpec:
     """A mesh body checked but not yet read: reading and integrating it is the slow part."""
 
@@ -263,7 +272,7 @@ def _refuse_keys(fields: dict[str, _Field], allowed: Sequence[str], kind: str) -
 def _explicit_body(fields: dict[str, _Field], field: _Field) -> RigidBody:
     _refuse_keys(fields, _EXPLICIT_BODY_KEYS, "an explicit body (no mesh:)")
     if "mass" not in fields:
-        raise field.child(field.node, "mass").error("missing; an explicit body needs its mass in kg")
+        raise field.child(field.node, "mass").error("missing; an explicit body needs a mass (kg)")
     mass = _positive(fields["mass"])
     inertia = _matrix3(fields["inertia"])
     com = _vector(fields["center_of_mass"]) if "center_of_mass" in fields else np.zeros(3)
@@ -279,7 +288,7 @@ def _mesh_body_spec(fields: dict[str, _Field], base_dir: Path) -> _MeshBodySpec:
     if "density" in fields and "mass" in fields:
         raise fields["mass"].error("give density or mass, not both")
     path = _existing_file(fields["mesh"], base_dir)
-    unit = _string(fields["unit"], "a unit name such as mm") if "unit" in fields else "m"
+    unit = _unit(fields["unit"]) if "unit" in fields else "m"
     allow_open = _boolean(fields["allow_open"]) if "allow_open" in fields else False
     if "mass" in fields:
         amount = {"mass": _positive(fields["mass"])}
@@ -288,32 +297,48 @@ def _mesh_body_spec(fields: dict[str, _Field], base_dir: Path) -> _MeshBodySpec:
     return _MeshBodySpec(fields["mesh"], path, unit, allow_open, amount)
 
 
-def _mesh_body(spec: _MeshBodySpec) -> RigidBody:
-    """Read, check and integrate the mesh; its errors keep their class, prefixed with our place."""
+def _unit(field: _Field) -> str:
+    from massprops.io import UNITS  # the readers' own table, as for the CLI's --unit
+
+    return _choice(field, tuple(UNITS), "unit")
+
+
+def _mesh_body(spec: _MeshBodySpec) -> tuple[RigidBody, tuple[str, ...]]:
+    """Read, check and integrate the mesh: the body and the health check's warnings. Errors keep
+    their class, prefixed with our place."""
     # Imported here: the mesh pipeline is heavy and only mesh bodies need it.
     from massprops.health import prepare_mesh
     from massprops.io import read_mesh
     from massprops.mass import mass_properties
 
     try:
-        mesh, _health = prepare_mesh(read_mesh(spec.path, unit=spec.unit),
+        mesh, health = prepare_mesh(read_mesh(spec.path, unit=spec.unit),
                                      allow_open=spec.allow_open)
         props = mass_properties(mesh, **spec.amount)
     except InputError as exc:
         raise _with_place(exc, spec.field) from exc
-    com = np.array(props.center_of_mass, dtype=np.float64)
-    moments = np.array(props.principal_moments, dtype=np.float64)
+    axes = np.asarray(props.principal_axes, dtype=np.float64)
+    inertia = (axes * np.asarray(props.principal_moments, dtype=np.float64)) @ axes.T
+    try:  # the same checks as an explicit body: an open mesh (allow_open) can fail them
+        body = RigidBody.from_inertia(float(props.mass), inertia, props.center_of_mass)
+    except UnphysicalInertiaError as exc:
+        raise _with_place(type(exc)(f"{spec.path.name}: {exc}"), spec.field) from exc
     used = mesh.vertices[np.unique(mesh.faces)]
-    bounding_radius = float(np.linalg.norm(used - com, axis=1).max())
-    size = max(bounding_radius, math.sqrt(moments[2] / props.mass))
-    return RigidBody(float(props.mass), moments, np.array(props.principal_axes, dtype=np.float64),
-                     com, size)
+    bounding_radius = float(np.linalg.norm(used - body.center_of_mass, axis=1).max())
+    return dataclasses.replace(body, size=max(bounding_radius, body.size)), tuple(health.warnings)
+
+
+def _mesh_files(path: Path) -> tuple[Path, ...]:
+    """The files a mesh body reads: a ``.vtx``/``.fac`` pair is two (the reader finds the other)."""
+    pair = {".vtx": ".fac", ".fac": ".vtx"}.get(path.suffix)
+    return (path,) if pair is None else (path, path.with_suffix(pair))
 
 
 def _with_place(exc: InputError, field: _Field) -> InputError:
     """The same error class (so callers can still tell an open mesh from a bad scene), its
     message prefixed with the scene file, line and key path."""
-    message = _one_line(field.where() + str(exc))
+    # The mesh modules word their fixes for the command line; in a scene the option is a key.
+    message = _one_line(field.where() + str(exc).replace("--allow-open", "allow_open: true"))
     try:
         return type(exc)(message)
     except TypeError:  # a subclass with a different constructor
@@ -339,7 +364,8 @@ def _initial(field: _Field | None) -> InitialState:
     if "orientation" in fields:
         values["orientation"] = _quaternion(fields["orientation"])
     if "angular_velocity_frame" in fields:
-        values["angular_velocity_frame"] = _choice(fields["angular_velocity_frame"], FRAMES, "frame")
+        frame = _choice(fields["angular_velocity_frame"], FRAMES, "frame")
+        values["angular_velocity_frame"] = frame
     return InitialState(**values)
 
 
@@ -426,7 +452,8 @@ def _forces(field: _Field | None) -> tuple[ForceTerm, ...]:
     if _is_null(field):
         return ()
     if not isinstance(field.node, yaml.SequenceNode):
-        raise field.error(f"expected a list of forces (- {{type: ...}} lines), got {_shown(field.node)}")
+        raise field.error(f"expected a list of forces, one '- {{type: ...}}' line each, "
+                          f"got {_shown(field.node)}")
     return tuple(_force(field.child(node, i)) for i, node in enumerate(field.node.value))
 
 
@@ -453,7 +480,7 @@ def _output(field: _Field | None, base_dir: Path) -> OutputSettings:
     if "file" in fields:
         path = base_dir / _string(fields["file"], "a file name ending in .csv or .npz")
         if path.suffix not in OUTPUT_SUFFIXES:
-            raise fields["file"].error(f"expected a file name ending in .csv or .npz, got {path.name!r}")
+            raise fields["file"].error(f"expected a name ending in .csv or .npz, got {path.name!r}")
         if not path.parent.is_dir():
             raise fields["file"].error(f"folder {path.parent} does not exist; create it first "
                                        "(relative paths start at the scene file's folder)")
@@ -469,38 +496,20 @@ def _compose(text: str, source: str) -> yaml.Node:
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
+        mark, context = exc.problem_mark or exc.context_mark, exc.context_mark
         where = f"{source}:{mark.line + 1}:{mark.column + 1}" if mark else source
-        what = "; ".join(str(p) for p in (exc.context, exc.problem) if p)
+        opened = f" (line {context.line + 1}, column {context.column + 1})" if context else ""
+        what = "; ".join(p for p in (exc.context and exc.context + opened, exc.problem) if p)
         raise SceneError(_one_line(f"{where}: invalid YAML: {what}")) from exc
     except yaml.reader.ReaderError as exc:  # a forbidden character: a position, no mark
         line = text.count("\n", 0, exc.position) + 1
+        char = f"#x{exc.character:04x}" if isinstance(exc.character, int) else repr(exc.character)
         raise SceneError(_one_line(f"{source}:{line}: invalid YAML: {exc.reason} "
-                                   f"(character {exc.character!r})")) from exc
-    if root is None:
+                                   f"(character {char}); remove it")) from exc
+    if root is None or (isinstance(root, yaml.ScalarNode) and root.tag == _NULL):
         raise SceneError(f"{source}:1: the file is empty; a scene needs at least "
                          f"{_BODY_EXAMPLE} and time: {{duration: 10.0}}")
     return root
-
-
-def _refuse_tags(root: yaml.Node, source: str) -> None:
-    """Scenes are plain data: any tag beyond str/int/float/bool/null/list/mapping is refused."""
-    seen: set[int] = set()
-    stack = [root]
-    while stack:
-        node = stack.pop()
-        if id(node) in seen:  # aliases share nodes, and may even form cycles
-            continue
-        seen.add(id(node))
-        if node.tag not in _PLAIN_TAGS:
-            line = node.start_mark.line + 1
-            hint = ("YAML merge keys (<<) are not supported; write the keys out"
-                    if node.tag == _TAG + "merge" else "scenes are plain data; remove the tag")
-            raise SceneError(f"{source}:{line}: unsupported YAML tag {node.tag!r}: {hint}")
-        if isinstance(node, yaml.SequenceNode):
-            stack.extend(node.value)
-        elif isinstance(node, yaml.MappingNode):
-            stack.extend(n for pair in node.value for n in pair)
 
 
 def parse_scene(text: str, *, source: str, base_dir: Path,
@@ -515,7 +524,6 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
     """
     base_dir = Path(base_dir)
     root = _compose(text, source)
-    _refuse_tags(root, source)
     top = _Field(root, "", source)
     if not isinstance(root, yaml.MappingNode):
         raise top.error(f"expected a mapping with keys {', '.join(_TOP_KEYS)} at the top level, "
@@ -527,11 +535,12 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
     time = _time(fields["time"], known_integrators)
     output = _output(fields.get("output"), base_dir)
     if isinstance(body, _MeshBodySpec):
-        body_source = str(body.path)
-        body = _mesh_body(body)
+        body_source, inputs = str(body.path), _mesh_files(body.path)
+        body, warnings = _mesh_body(body)
     else:
-        body_source = "explicit"
-    return Scene(body, initial, forces, time, output, source=source, body_source=body_source)
+        body_source, inputs, warnings = "explicit", (), ()
+    return Scene(body, initial, forces, time, output, source=source, body_source=body_source,
+                 input_files=inputs, warnings=warnings)
 
 
 def load_scene(path: str | os.PathLike[str], *,

@@ -1,0 +1,67 @@
+"""Figures of a simulation (matplotlib, an optional extra: pip install massprops[plot])."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from massprops.errors import UsageError
+
+
+def _pyplot():
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")  # files only; never needs a display
+        import matplotlib.pyplot as plt
+    except ImportError as exc:
+        raise UsageError("--plot needs matplotlib: pip install 'massprops[plot]'") from exc
+    return plt
+
+
+def save_figure(fig, path: str | Path, *, force: bool = False, protect=()) -> None:
+    """Render ``fig`` as PNG and write it atomically (never over an input or, without force, an
+    existing file)."""
+    import io
+
+    from massprops.io.atomic import atomic_write_bytes
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=120)
+    atomic_write_bytes(Path(path), buf.getvalue(), force=force, protect=protect)
+
+
+def plot_simulation(result, path: str | Path, *, force: bool = False, protect=()) -> None:
+    """Three stacked panels against time: angular velocity in the body frame, relative energy
+    drift (if the scene conserves or only loses energy), relative angular-momentum drift."""
+    plt = _pyplot()
+    tr = result.trajectory
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True, constrained_layout=True)
+    for k, label in enumerate("xyz"):
+        axes[0].plot(tr.t, tr.angular_velocity_body[:, k], label=f"ω_{label}")
+    axes[0].set_ylabel("angular velocity,\nbody frame [rad/s]")
+    axes[0].legend(loc="upper right", ncol=3)
+    axes[0].set_title(f"{result.integrator}: {result.steps} steps, {result.wall_time_s:.3g} s")
+    _drift(axes[1], tr.t, None if tr.energy is None else tr.energy - tr.energy[0],
+           abs(tr.energy[0]) if tr.energy is not None else 1.0, "energy drift\n|E - E₀| / |E₀|")
+    h = tr.angular_momentum
+    _drift(axes[2], tr.t, np.linalg.norm(h - h[0], axis=1), np.linalg.norm(h[0]),
+           "angular momentum drift\n|H - H₀| / |H₀| (world)")
+    axes[2].set_xlabel("time [s]")
+    try:
+        save_figure(fig, path, force=force, protect=protect)
+    finally:
+        plt.close(fig)
+
+
+def _drift(ax, t, delta, scale, label) -> None:
+    ax.set_ylabel(label)
+    if delta is None:
+        ax.text(0.5, 0.5, "not conserved in this scene (external work)", ha="center",
+                va="center", transform=ax.transAxes)
+        return
+    rel = np.abs(delta) / (scale if scale > 0 else 1.0)
+    floor = np.finfo(float).eps / 4  # plot exact zeros at a visible floor on the log axis
+    ax.semilogy(t, np.maximum(rel, floor))
+    ax.grid(True, which="both", alpha=0.3)

@@ -1,0 +1,360 @@
+"""Run a scene: frames at the edges, segments between force-window edges, closed forms where the
+scene allows them, diagnostics at the end.
+
+Inside, the rotation lives in the principal frame: q_p (principal -> world) and omega' (principal),
+with J' = diag(I1, I2, I3). At the edges: A_body = A_p Rᵀ (R: principal axes as columns, body
+frame), omega_body = R omega', omega_world = A_p omega'.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from massprops.dynamics.forces import (
+    DRAG,
+    FORCE_BODY,
+    FORCE_WORLD,
+    SPRING,
+    TORQUE_BODY,
+    TORQUE_WORLD,
+    ForceProgram,
+    compile_forces,
+    energy,
+)
+from massprops.dynamics.model import Scene
+from massprops.errors import DivergenceError, UsageError
+from massprops.rotation import canonical, matrix_to_quat, quat_multiply, quat_to_matrix
+
+STEP_BUDGET = 2_000_000
+"""`auto` picks the implicit method when an explicit one would need more steps than this to
+resolve the stiffest rate over the run (RK-type stability limit ~2.8 / rate)."""
+
+ENERGY_BLOWUP = 1e6
+"""A conservative or dissipative scene whose energy grows by this factor of its scale diverged."""
+
+CHUNKS = 32
+"""The run is cut into this many compiled calls (at fixed times, so results never depend on
+timing); between calls Ctrl-C and the progress bar are served."""
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """Sampled motion, SI, world frame unless named: t (n,) s; position (n, 3) COM; orientation
+    (n, 4) body->world [w, x, y, z]; velocity (n, 3); angular_velocity (n, 3) world;
+    angular_velocity_body (n, 3) body frame; angular_momentum (n, 3) world, about the COM,
+    kg·m²/s; energy (n,) J or None where the scene makes it meaningless (external work)."""
+
+    t: np.ndarray
+    position: np.ndarray
+    orientation: np.ndarray
+    velocity: np.ndarray
+    angular_velocity: np.ndarray
+    angular_velocity_body: np.ndarray
+    angular_momentum: np.ndarray
+    energy: np.ndarray | None = None
+
+    def row(self, i: int) -> dict:
+        return {"t": float(self.t[i]), "position": self.position[i].tolist(),
+                "orientation": self.orientation[i].tolist(), "velocity": self.velocity[i].tolist(),
+                "angular_velocity": self.angular_velocity[i].tolist(),
+                "angular_velocity_body": self.angular_velocity_body[i].tolist()}
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationResult:
+    """What `massprops simulate` reports. ``trajectory`` holds the samples (always t = 0 and the
+    last time reached); ``interrupted`` is set when Ctrl-C stopped the run early."""
+
+    integrator: str
+    reason: str
+    steps: int
+    evaluations: int
+    rejected: int
+    wall_time_s: float
+    warmup_time_s: float
+    trajectory: Trajectory
+    diagnostics: dict
+    interrupted: bool = False
+    notes: tuple[str, ...] = field(default=())
+
+    def as_dict(self) -> dict:
+        return {"integrator": self.integrator, "reason": self.reason, "steps": self.steps,
+                "evaluations": self.evaluations, "rejected_steps": self.rejected,
+                "wall_time_s": self.wall_time_s, "warmup_time_s": self.warmup_time_s,
+                "interrupted": self.interrupted, "final": self.trajectory.row(-1),
+                "diagnostics": self.diagnostics}
+
+
+# --- frames at the edges -----------------------------------------------------------------------
+def initial_principal_state(scene: Scene) -> np.ndarray:
+    """(13,) [r, v, q_p, omega'] at t = 0 from the scene's world/body initial values."""
+    body, ini = scene.body, scene.initial
+    q_r = matrix_to_quat(body.principal_axes)  # principal -> body
+    q_p = canonical(quat_multiply(ini.orientation, q_r))
+    if ini.angular_velocity_frame == "body":
+        w_p = body.principal_axes.T @ ini.angular_velocity
+    else:
+        w_p = quat_to_matrix(q_p).T @ ini.angular_velocity
+    return np.concatenate([ini.position, ini.velocity, q_p, w_p])
+
+
+def to_world(scene: Scene, t: np.ndarray, y: np.ndarray, program: ForceProgram,
+             with_energy: bool) -> Trajectory:
+    """Principal-frame states (n, 13) -> a Trajectory in the contract's frames."""
+    r_axes = scene.body.principal_axes
+    q_p = y[:, 6:10] / np.linalg.norm(y[:, 6:10], axis=1, keepdims=True)
+    q_body = canonical(quat_multiply(q_p, matrix_to_quat(r_axes.T)))
+    w_p = y[:, 10:13]
+    a_p = quat_to_matrix(q_p)
+    w_world = np.einsum("nij,nj->ni", a_p, w_p)
+    h_world = np.einsum("nij,nj->ni", a_p, program.inertia * w_p)
+    return Trajectory(t.copy(), y[:, 0:3].copy(), q_body, y[:, 3:6].copy(), w_world,
+                      w_p @ r_axes.T, h_world, energy(y, program) if with_energy else None)
+
+
+# --- choosing a method -------------------------------------------------------------------------
+def choose_integrator(scene: Scene, program: ForceProgram, available: dict) -> tuple[str, str]:
+    """(name, reason) for ``time.integrator: auto``."""
+    if not program.has_torque and program.translation_closed_form and "exact" in available:
+        return "exact", "torque-free with constant force: closed-form solution, no time stepping"
+    rate = program.stiffest_rate
+    explicit_steps = scene.time.duration * rate / 2.8
+    if rate > 0 and explicit_steps > STEP_BUDGET and "implicit" in available:
+        return "implicit", (f"stiff: fastest rate {rate:.3g}/s would need ~{explicit_steps:.2g} "
+                            f"explicit steps (> {STEP_BUDGET:.0e})")
+    return "dop853", "non-stiff with forces or torques: adaptive 8th order"
+
+
+def is_conservative(program: ForceProgram) -> bool:
+    """Energy is conserved: only gravity and undamped springs, no windows."""
+    codes = program.codes
+    if np.isin(codes, [FORCE_WORLD, FORCE_BODY, TORQUE_WORLD, TORQUE_BODY]).any():
+        return False
+    if (codes == DRAG).any() and np.any(program.params[codes == DRAG, 0:2] != 0):
+        return False
+    return not np.any(program.params[codes == SPRING, 9] != 0)
+
+
+def cannot_gain_energy(program: ForceProgram) -> bool:
+    """No term does external work (only gravity, springs, dampers, drag)."""
+    return not np.isin(program.codes, [FORCE_WORLD, FORCE_BODY, TORQUE_WORLD, TORQUE_BODY]).any()
+
+
+def sample_times(duration: float, every: float | None) -> np.ndarray:
+    """Output times: k·every below the duration, and the duration itself (never accumulated)."""
+    if every is None:
+        return np.array([0.0, duration])
+    n = int(math.floor(duration / every * (1 + 1e-12)))
+    t = every * np.arange(n + 1)
+    return t if t[-1] >= duration * (1 - 1e-12) else np.append(t, duration)
+
+
+# --- the run -----------------------------------------------------------------------------------
+def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None = None,
+             step: float | None = None, every: float | None = None,
+             progress: Callable[[float], None] | None = None) -> SimulationResult:
+    """Integrate ``scene``; options override the scene's time/output settings.
+
+    progress(fraction) is called between compiled chunks. Ctrl-C during the run returns the
+    samples computed so far with ``interrupted=True`` (the caller exits 130).
+    Raises DivergenceError (exit 3) naming the time and the likely cause.
+    """
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    program = compile_forces(scene)
+    name = integrator or scene.time.integrator
+    if name == "auto":
+        name, reason = choose_integrator(scene, program, INTEGRATORS)
+    elif name not in INTEGRATORS:
+        raise UsageError(f"unknown integrator {name!r}; choose from auto, "
+                         + ", ".join(sorted(INTEGRATORS)))
+    else:
+        reason = "chosen by the user"
+    spec = INTEGRATORS[name]
+    duration = scene.time.duration
+    t_out = sample_times(duration, every if every is not None else scene.output.every)
+    setting = _setting(spec, scene, program, rtol, step)
+    y0 = initial_principal_state(scene)
+    runner = _Runner(spec, program, setting, progress, duration)
+    y_out, t_reached, interrupted = runner.run(y0, t_out)
+    keep = t_out <= t_reached
+    t_kept, y_kept = t_out[keep], y_out[keep]
+    if t_kept[-1] < t_reached:  # interrupted or failed between samples: keep the last state
+        t_kept, y_kept = np.append(t_kept, t_reached), np.vstack([y_kept, runner.y_last])
+    conservative = is_conservative(program)
+    traj = to_world(scene, t_kept, y_kept, program, with_energy=conservative
+                    or cannot_gain_energy(program))
+    diagnostics = _diagnostics(program, y_kept, traj, conservative, runner.err)
+    result = SimulationResult(
+        integrator=name, reason=reason, steps=int(runner.stats[0]),
+        evaluations=int(runner.stats[1]), rejected=int(runner.stats[2]),
+        wall_time_s=runner.wall, warmup_time_s=runner.warmup, trajectory=traj,
+        diagnostics=diagnostics, interrupted=interrupted)
+    if runner.failure is not None:
+        raise DivergenceError(f"{scene.source}: {runner.failure}", partial=result)
+    if traj.energy is not None:  # only scenes that cannot gain energy carry it
+        _check_energy(scene, program, traj, setting, name, result)
+    return result
+
+
+def _setting(spec, scene: Scene, program: ForceProgram, rtol: float | None,
+             step: float | None) -> float:
+    if spec.kind == "adaptive":
+        return float(rtol if rtol is not None else scene.time.rtol)
+    if spec.kind == "fixed":
+        h = step if step is not None else scene.time.step
+        if h is None:  # resolve the fastest rate with margin, at most 1e5 steps per run
+            fastest = max(program.stiffest_rate, 1e-300)
+            h = min(0.1 / fastest, scene.time.duration / 1e3)
+        return float(h)
+    return 0.0
+
+
+def _check_energy(scene, program, traj, setting, name, result) -> None:
+    e = traj.energy
+    if e is None or len(e) < 2:
+        return
+    scale = max(abs(e[0]), 1e-300)
+    if not np.all(np.isfinite(e)) or np.max(e - e[0]) > ENERGY_BLOWUP * scale:
+        where = int(np.argmax(~np.isfinite(e) | (e - e[0] > ENERGY_BLOWUP * scale)))
+        raise DivergenceError(
+            f"{scene.source}: {name} diverged near t = {traj.t[where]:.6g} s: the energy grew "
+            f"by more than {ENERGY_BLOWUP:.0e} times its initial value; "
+            + _stability_hint(program, setting, name), partial=result)
+
+
+def _stability_hint(program: ForceProgram, setting: float, name: str) -> str:
+    rate = program.stiffest_rate
+    if rate > 0:
+        return (f"the stiffest term has rate {rate:.3g}/s, so explicit steps must stay below "
+                f"~{2.8 / rate:.3g} s (step here: {setting:.3g}); use integrator implicit or a "
+                "smaller step")
+    return "try a smaller step or tolerance"
+
+
+def _diagnostics(program: ForceProgram, y: np.ndarray, traj: Trajectory, conservative: bool,
+                 err: float) -> dict:
+    qn = np.abs(np.linalg.norm(y[:, 6:10], axis=1) - 1.0)
+    out = {"energy_rel_drift": None, "angular_momentum_rel_drift": None,
+           "quaternion_norm_error": float(qn.max()), "error_estimate": float(err)}
+    if conservative and traj.energy is not None:
+        e = traj.energy
+        kinetic = 0.5 * program.mass * np.sum(y[0, 3:6] ** 2) + 0.5 * np.sum(
+            program.inertia * y[0, 10:13] ** 2)
+        scale = max(abs(e[0]), kinetic, 1e-300)
+        out["energy_rel_drift"] = float(np.max(np.abs(e - e[0])) / scale)
+    if not program.has_torque:
+        h = traj.angular_momentum
+        scale = np.linalg.norm(h[0])
+        drift = np.max(np.linalg.norm(h - h[0], axis=1))
+        out["angular_momentum_rel_drift"] = float(drift / scale) if scale > 0 else float(drift)
+    return out
+
+
+class _Runner:
+    """Walks the segments between window edges in chunks, filling the samples."""
+
+    def __init__(self, spec, program: ForceProgram, setting: float, progress, duration: float):
+        self.spec, self.program, self.setting = spec, program, setting
+        self.progress, self.duration = progress, duration
+        self.stats = np.zeros(5, dtype=np.int64)
+        self.err, self.wall, self.warmup = 0.0, 0.0, 0.0
+        self.failure: str | None = None
+        self.y_last = None
+
+    def run(self, y0: np.ndarray, t_out: np.ndarray):
+        p = self.program
+        rot_only = p.translation_closed_form
+        y_full = y0.copy()
+        y_out = np.full((len(t_out), 13), np.nan)
+        edges = np.concatenate([[0.0], p.breakpoints(0.0, self.duration), [self.duration]])
+        self._warm_up(y0, rot_only)
+        start = time.perf_counter()
+        t_now, interrupted = 0.0, False
+        try:
+            for t0, t1 in zip(edges[:-1], edges[1:]):
+                active = p.active(0.5 * (t0 + t1))
+                t_now = self._segment(y_full, t0, t1, active, rot_only, t_out, y_out)
+                if self.failure is not None:
+                    break
+        except KeyboardInterrupt:
+            interrupted = True
+        self.wall = time.perf_counter() - start
+        self.y_last = y_full
+        return y_out, t_now, interrupted
+
+    def _warm_up(self, y0: np.ndarray, rot_only: bool) -> None:
+        """Compile or load the kernel from cache on a tiny problem; timed apart from the run."""
+        p = self.program
+        start = time.perf_counter()
+        y = (y0[6:] if rot_only else y0).copy()
+        self.spec.run_segment(y, 0.0, 1e-9, self.setting if self.setting else 1e-9,
+                              (p.active(0.0), p.codes, p.params, p.mass, p.inertia),
+                              rot_only, np.empty(0), np.empty((0, y.size)),
+                              np.zeros(5, dtype=np.int64))
+        self.warmup = time.perf_counter() - start
+
+    def _segment(self, y_full, t0, t1, active, rot_only, t_out, y_out) -> float:
+        """Advance y_full (13,) from t0 to t1 in chunks, fill the samples, return t reached."""
+        p = self.program
+        first = t0 == 0.0
+        sel = np.flatnonzero((t_out >= t0) & (t_out <= t1) if first else
+                             (t_out > t0) & (t_out <= t1))
+        accel = p.constant_force(active) / p.mass if rot_only else None
+        arrays = (active, p.codes, p.params, p.mass, p.inertia)
+        for t, t_end in self._chunks(t0, t1):
+            idx = sel[(t_out[sel] >= t) & (t_out[sel] <= t_end)] if t == t0 else \
+                sel[(t_out[sel] > t) & (t_out[sel] <= t_end)]
+            y = y_full[6:].copy() if rot_only else y_full.copy()
+            ys = np.empty((idx.size, y.size))
+            err, t_reached = self.spec.run_segment(y, t, t_end, self.setting, arrays, rot_only,
+                                                   t_out[idx], ys, self.stats)
+            self.err += err
+            if rot_only:
+                r0, v0 = y_full[0:3].copy(), y_full[3:6].copy()
+                tau = t_out[idx] - t
+                ys = np.hstack([r0 + np.outer(tau, v0) + 0.5 * np.outer(tau**2, accel),
+                                v0 + np.outer(tau, accel), ys])
+                dt = t_reached - t
+                y_full[0:3] = r0 + v0 * dt + 0.5 * accel * dt * dt
+                y_full[3:6] = v0 + accel * dt
+                y_full[6:] = y
+            else:
+                y_full[:] = y
+            good = t_out[idx] <= t_reached
+            y_out[idx[good]] = ys[good]
+            if self.stats[4] != 0:
+                self.failure = self._failure_message(t_reached)
+                return t_reached
+            if t_reached < t_end:  # the kernel stopped early without a status: treat as failure
+                self.failure = self._failure_message(t_reached)
+                return t_reached
+            if self.progress is not None:
+                self.progress(t_end / self.duration)
+        return t1
+
+    def _chunks(self, t0: float, t1: float) -> list[tuple[float, float]]:
+        """[t0, t1] cut at the run's fixed grid k·duration/CHUNKS (deterministic: results never
+        depend on timing); fixed-step methods cut only on their own step grid."""
+        grid = self.duration * np.arange(1, CHUNKS) / CHUNKS
+        cuts = grid[(grid > t0) & (grid < t1)]
+        if self.spec.kind == "fixed":
+            n = max(1, math.ceil((t1 - t0) / self.setting * (1 - 1e-12)))
+            h = (t1 - t0) / n
+            ks = np.unique(np.clip(np.round((cuts - t0) / h), 1, n - 1).astype(int)) if n > 1 \
+                else np.empty(0, int)
+            cuts = t0 + ks * h
+        bounds = [t0, *cuts.tolist(), t1]
+        return list(zip(bounds[:-1], bounds[1:]))
+
+    def _failure_message(self, t_reached: float) -> str:
+        status = int(self.stats[4])
+        what = "the state became NaN or infinite" if status == 1 else \
+            "the step size fell below round-off (the problem is stiff or singular there)"
+        return (f"{self.spec.name} diverged at t = {t_reached:.6g} s: {what}; "
+                + _stability_hint(self.program, self.setting, self.spec.name))

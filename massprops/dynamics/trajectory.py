@@ -1,0 +1,60 @@
+"""Trajectory files: CSV (header with units) or NPZ, written atomically, never over an input."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from massprops.errors import UsageError
+
+COLUMNS = [
+    ("t", "s", "t"),
+    ("position", "m", ("x", "y", "z")),
+    ("orientation", "", ("qw", "qx", "qy", "qz")),
+    ("velocity", "m/s", ("vx", "vy", "vz")),
+    ("angular_velocity", "rad/s", ("wx", "wy", "wz")),
+    ("angular_velocity_body", "rad/s", ("wx_body", "wy_body", "wz_body")),
+    ("angular_momentum", "kg*m^2/s", ("hx", "hy", "hz")),
+    ("energy", "J", "energy"),
+]
+"""(Trajectory field, unit, column name(s)); world frame unless the name says body."""
+
+
+def _table(traj) -> tuple[list[str], np.ndarray]:
+    names, cols = [], []
+    for field, unit, labels in COLUMNS:
+        value = getattr(traj, field)
+        if value is None:
+            continue
+        value = np.asarray(value, dtype=np.float64).reshape(len(traj.t), -1)
+        labels = (labels,) if isinstance(labels, str) else labels
+        names += [f"{lab} [{unit}]" if unit else lab for lab in labels]
+        cols.append(value)
+    return names, np.hstack(cols)
+
+
+def trajectory_bytes(traj, suffix: str) -> bytes:
+    """The file's content: CSV with full round-trip precision, or NPZ with one array per field."""
+    names, table = _table(traj)
+    buf = io.BytesIO()
+    if suffix == ".csv":
+        np.savetxt(buf, table, delimiter=",", fmt="%.17g", header=",".join(names), comments="")
+    elif suffix == ".npz":
+        arrays = {f: np.asarray(getattr(traj, f)) for f, _, _ in COLUMNS
+                  if getattr(traj, f) is not None}
+        np.savez(buf, columns=np.array(names), **arrays)
+    else:
+        raise UsageError(f"trajectory file must end in .csv or .npz, got {suffix!r}")
+    return buf.getvalue()
+
+
+def write_trajectory(traj, path: str | Path, *, force: bool = False, protect=()) -> None:
+    """Write ``traj`` to ``path`` (.csv or .npz) atomically; refuses to replace an input or an
+    existing file unless ``force`` (OutputExistsError)."""
+    from massprops.io.atomic import atomic_write_bytes
+
+    path = Path(path)
+    atomic_write_bytes(path, trajectory_bytes(traj, path.suffix.lower()), force=force,
+                       protect=protect)

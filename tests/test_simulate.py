@@ -1,0 +1,217 @@
+"""simulate end to end: closed forms through the frames, windows, diagnostics, files, exit codes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from conftest import CUBE_QUADS, CUBE_VERTS, json_lines, vf_text
+from massprops.dynamics.model import (Drag, Gravity, InitialState, OutputSettings, PointForce,
+                                      RigidBody, Scene, Spring, TimeSettings, Torque)
+from massprops.dynamics.simulate import simulate
+from massprops.errors import DivergenceError
+from massprops.rotation import quat_from_axis_angle, quat_to_matrix, rotation_angle_between
+
+BOX = RigidBody.from_inertia(12.0, np.diag([8.0, 13.0, 13.0]))  # the notes' cuboid
+ASYM = RigidBody.from_inertia(2.0, np.diag([1.0, 2.0, 3.0]))
+
+
+def scene(body=BOX, forces=(), duration=1.0, integrator="auto", initial=None, **time):
+    return Scene(body=body, initial=initial or InitialState(), forces=tuple(forces),
+                 time=TimeSettings(duration=duration, integrator=integrator, **time),
+                 output=OutputSettings())
+
+
+def final(result):
+    return result.trajectory.row(-1)
+
+
+@pytest.mark.parametrize("integrator", ["auto", "exact", "rk4", "dop853"])
+def test_free_fall_is_exact(integrator):
+    g = np.array([0.0, 0.0, -9.81])
+    ini = InitialState(position=np.array([1.0, 2.0, 3.0]), velocity=np.array([0.5, 0.0, 4.0]))
+    res = simulate(scene(forces=[Gravity(g)], duration=2.0, integrator=integrator, initial=ini))
+    f = final(res)
+    assert np.allclose(f["position"], ini.position + 2.0 * ini.velocity + 2.0 * g, rtol=1e-14,
+                       atol=1e-13)
+    assert np.allclose(f["velocity"], ini.velocity + 2.0 * g, rtol=1e-14, atol=1e-13)
+    if integrator == "auto":
+        assert res.integrator == "exact"
+
+
+def test_body_frame_force_equals_world_force_at_t0():
+    q = quat_from_axis_angle(np.array([1.0, 2.0, 3.0]) / math.sqrt(14), 0.7)
+    f_body = np.array([0.3, -1.0, 2.0])
+    f_world = quat_to_matrix(q) @ f_body
+    point = np.array([0.5, 0.2, -0.1])
+    ini = InitialState(orientation=q)
+    short = dict(duration=1e-3, integrator="dop853", rtol=1e-13)
+    a = simulate(scene(forces=[PointForce(f_body, "body", point)], initial=ini, **short))
+    b = simulate(scene(forces=[PointForce(f_world, "world", point)], initial=ini, **short))
+    # identical at t = 0, so equal to O(t²·ω) over a short run
+    for key in ("position", "velocity", "angular_velocity"):
+        assert np.allclose(final(a)[key], final(b)[key], rtol=1e-6, atol=1e-12)
+
+
+def test_constant_body_torque_about_principal_axis():
+    tau = 2.0
+    res = simulate(scene(forces=[Torque(np.array([0.0, 0.0, tau]), "body")], duration=3.0,
+                         integrator="dop853", rtol=1e-12))
+    f = final(res)
+    assert np.allclose(f["angular_velocity"], [0, 0, tau / 13 * 3.0], rtol=1e-11, atol=1e-13)
+    angle = tau * 9.0 / (2 * 13)
+    assert rotation_angle_between(np.array(f["orientation"]),
+                                  quat_from_axis_angle(np.array([0.0, 0, 1]), angle)) < 1e-10
+
+
+def test_harmonic_spring_period():
+    k, m = 100.0, 12.0
+    ini = InitialState(position=np.array([0.1, 0.0, 0.0]))
+    period = 2 * math.pi * math.sqrt(m / k)
+    res = simulate(scene(forces=[Spring(np.zeros(3), k)], duration=period, integrator="dop853",
+                         rtol=1e-12, initial=ini))
+    assert np.allclose(final(res)["position"], [0.1, 0, 0], atol=1e-10)
+    assert res.diagnostics["energy_rel_drift"] < 1e-9
+    assert res.diagnostics["angular_momentum_rel_drift"] is not None  # spring at COM: no torque
+
+
+def test_damped_spring_closed_form():
+    k, c, m = 50.0, 3.0, 12.0
+    x0 = 0.2
+    ini = InitialState(position=np.array([0.0, x0, 0.0]))
+    res = simulate(scene(forces=[Spring(np.zeros(3), k, damping=c)], duration=2.0,
+                         integrator="dop853", rtol=1e-12, initial=ini))
+    zeta_w, wd = c / (2 * m), math.sqrt(k / m - (c / (2 * m)) ** 2)
+    x = x0 * math.exp(-zeta_w * 2.0) * (math.cos(wd * 2.0) + zeta_w / wd * math.sin(wd * 2.0))
+    assert final(res)["position"][1] == pytest.approx(x, abs=1e-10)
+    assert res.diagnostics["energy_rel_drift"] is None  # damping: not conserved, reported null
+
+
+def test_window_shorter_than_step_is_resolved():
+    # 1 N on 12 kg for 1e-4 s inside a run with step 1e-2: impulse 1e-4 N·s exactly
+    res = simulate(scene(forces=[PointForce(np.array([1.0, 0, 0]), start=0.5, end=0.5001)],
+                         duration=1.0, integrator="rk4", step=1e-2))
+    assert final(res)["velocity"][0] == pytest.approx(1e-4 / 12, rel=1e-12)
+    assert final(res)["position"][0] == pytest.approx(1e-4 / 12 * (1.0 - 0.50005), rel=1e-9)
+
+
+def test_torque_free_exact_matches_tight_dop853():
+    ini = InitialState(angular_velocity=np.array([1.0, 0.05, 0.3]),
+                       angular_velocity_frame="body")
+    ex = simulate(scene(body=ASYM, duration=20.0, integrator="exact", initial=ini))
+    nu = simulate(scene(body=ASYM, duration=20.0, integrator="dop853", rtol=1e-13, initial=ini))
+    assert np.allclose(final(ex)["angular_velocity"], final(nu)["angular_velocity"], atol=1e-9)
+    assert rotation_angle_between(np.array(final(ex)["orientation"]),
+                                  np.array(final(nu)["orientation"])) < 1e-9
+    assert ex.diagnostics["angular_momentum_rel_drift"] < 1e-13
+
+
+def test_mesh_body_equals_explicit_body(tmp_path):
+    mesh = tmp_path / "box.vf"
+    mesh.write_text(vf_text((np.array(CUBE_VERTS, float) * [3.0, 2.0, 1.0]).tolist(), CUBE_QUADS))
+    yaml_common = ("initial: {angular_velocity: [0.3, 1.0, 0.2], angular_velocity_frame: body}\n"
+                   "forces: [{type: torque, vector: [0, 0.1, 0], frame: body}]\n"
+                   "time: {duration: 2.0, integrator: dop853, rtol: 1.0e-12}\n")
+    (tmp_path / "mesh.yaml").write_text(f"body: {{mesh: box.vf, density: 2.0}}\n{yaml_common}")
+    m = 12.0
+    j = np.diag([m * (4 + 1), m * (9 + 1), m * (9 + 4)]) / 12
+    (tmp_path / "explicit.yaml").write_text(
+        f"body: {{mass: {m}, inertia: {j.tolist()}, center_of_mass: [1.5, 1.0, 0.5]}}\n"
+        + yaml_common)
+    from massprops.dynamics.scene import load_scene
+
+    a = simulate(load_scene(tmp_path / "mesh.yaml"))
+    b = simulate(load_scene(tmp_path / "explicit.yaml"))
+    for key in ("position", "orientation", "velocity", "angular_velocity"):
+        assert np.allclose(final(a)[key], final(b)[key], atol=1e-10)
+
+
+def test_stiff_explicit_reports_divergence():
+    sc = scene(forces=[Spring(np.zeros(3), 1e8)], duration=0.1, integrator="rk4", step=1e-3,
+               initial=InitialState(position=np.array([1e-3, 0, 0])))
+    with pytest.raises(DivergenceError) as info:
+        simulate(sc)
+    assert "t = " in str(info.value) and "implicit" in str(info.value)
+
+
+def test_stiff_auto_picks_implicit_and_stays_bounded():
+    sc = scene(forces=[Spring(np.zeros(3), 1e8), Gravity(np.array([0, 0, -9.81]))],
+               duration=10.0, initial=InitialState(position=np.array([1e-3, 0, 0])))
+    res = simulate(sc)
+    assert res.integrator == "implicit"
+    e = res.trajectory.energy
+    assert np.all(np.isfinite(e)) and e[-1] <= e[0] * (1 + 1e-9)
+
+
+def test_drag_makes_energy_null_and_decays():
+    ini = InitialState(velocity=np.array([1.0, 0, 0]), angular_velocity=np.array([0, 0, 1.0]))
+    res = simulate(scene(forces=[Drag(linear=1.2, angular=0.13)], duration=1.0,
+                         integrator="dop853", rtol=1e-12, initial=ini))
+    assert res.diagnostics["energy_rel_drift"] is None
+    assert final(res)["velocity"][0] == pytest.approx(math.exp(-0.1), rel=1e-10)
+    assert final(res)["angular_velocity"][2] == pytest.approx(math.exp(-0.01), rel=1e-10)
+
+
+# --- the command --------------------------------------------------------------------------------
+def _write_scene(tmp_path, text, name="scene.yaml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def test_cli_json_contract_and_trajectory(run, tmp_path):
+    sc = _write_scene(tmp_path, "body: {mass: 12.0, inertia: [[8,0,0],[0,13,0],[0,0,13]]}\n"
+                                "initial: {velocity: [1, 0, 0]}\n"
+                                "forces: [{type: gravity, g: [0, 0, -9.81]}]\n"
+                                "time: {duration: 1.0}\n"
+                                "output: {every: 0.25, file: traj.csv}\n")
+    res = run("simulate", "--json", sc)
+    assert res.exit_code == 0, res.stderr
+    (out,) = json_lines(res.stdout)
+    assert {"integrator", "steps", "wall_time_s", "final", "diagnostics"} <= out.keys()
+    assert {"t", "position", "orientation", "velocity", "angular_velocity",
+            "angular_velocity_body"} <= out["final"].keys()
+    assert {"energy_rel_drift", "angular_momentum_rel_drift", "quaternion_norm_error",
+            "error_estimate"} <= out["diagnostics"].keys()
+    assert out["final"]["position"] == pytest.approx([1.0, 0, -9.81 / 2], abs=1e-14)
+    table = np.loadtxt(tmp_path / "traj.csv", delimiter=",", skiprows=1)
+    header = (tmp_path / "traj.csv").read_text().splitlines()[0]
+    assert header.startswith("t [s],x [m],y [m],z [m],qw")
+    assert np.allclose(table[:, 0], [0, 0.25, 0.5, 0.75, 1.0])
+    assert np.allclose(table[:, 3], -9.81 / 2 * table[:, 0] ** 2, atol=1e-14)
+    # a second run refuses to replace the trajectory without --force
+    again = run("simulate", "--json", sc)
+    assert again.exit_code == 1 and "--force" in again.stderr
+    assert run("simulate", "--json", "--force", sc).exit_code == 0
+
+
+@pytest.mark.parametrize("text,needle", [
+    ("body: {mass: -1, inertia: [[1,0,0],[0,1,0],[0,0,1]]}\ntime: {duration: 1}\n", "body.mass"),
+    ("body: {mass: 1, inertia: [[1,0,0],[0,1,0],[0,0,3]]}\ntime: {duration: 1}\n", "triangle"),
+    ("body: {mass: 1, inertia: [[1,0,0],[0,1,0],[0,0,1]]}\ntime: {duraton: 1}\n", "duraton"),
+    ("body: {mass: 1, inertia: [[1,0,0],[0,1,0],[0,0,1]]}\n", "duration"),
+    ("body: [unclosed\n", "scene.yaml"),
+], ids=["negative-mass", "triangle-inequality", "typo", "missing-duration", "yaml-syntax"])
+def test_cli_bad_scene_exit_1(run, tmp_path, text, needle):
+    res = run("simulate", _write_scene(tmp_path, text))
+    assert res.exit_code == 1
+    (line,) = res.stderr.strip().splitlines()
+    assert needle in line and "scene.yaml" in line
+
+
+def test_cli_divergence_exit_3(run, tmp_path):
+    sc = _write_scene(tmp_path, "body: {mass: 1, inertia: [[1,0,0],[0,1,0],[0,0,1]]}\n"
+                                "initial: {position: [0.001, 0, 0]}\n"
+                                "forces: [{type: spring, anchor: [0,0,0], stiffness: 1.0e8}]\n"
+                                "time: {duration: 0.1, integrator: rk4, step: 1.0e-3}\n")
+    res = run("simulate", sc)
+    assert res.exit_code == 3
+    assert "diverged" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_cli_unknown_integrator_exit_2(run, tmp_path):
+    sc = _write_scene(tmp_path, "body: {mass: 1, inertia: [[1,0,0],[0,1,0],[0,0,1]]}\n"
+                                "time: {duration: 1}\n")
+    assert run("simulate", "--integrator", "euler", sc).exit_code == 2
