@@ -34,11 +34,14 @@ class Mesh:
     name: str = "<mesh>"
 
     def __post_init__(self) -> None:
-        v, f = self.vertices, self.faces
+        v, f, sizes = self.vertices, self.faces, self.polygon_sizes
         if v.ndim != 2 or v.shape[1] != 3 or v.dtype != np.float64:
             raise TypeError(f"Mesh.vertices must be (n, 3) float64, got {v.shape} {v.dtype}")
         if f.ndim != 2 or f.shape[1] != 3 or f.dtype != np.int64:
             raise TypeError(f"Mesh.faces must be (m, 3) int64, got {f.shape} {f.dtype}")
+        if sizes is not None and ((sizes < 3).any() or int((sizes - 2).sum()) != f.shape[0]):
+            raise ValueError(f"Mesh.polygon_sizes (sum of sizes - 2 = {int((sizes - 2).sum())}) "
+                             f"does not match the {f.shape[0]} triangles")
 
     @property
     def n_vertices(self) -> int:
@@ -49,16 +52,31 @@ class Mesh:
         """Faces as the file has them (polygons count once)."""
         return int(self.faces.shape[0] if self.polygon_sizes is None else self.polygon_sizes.size)
 
-    def polygons(self) -> list[np.ndarray]:
-        """The file's faces as vertex-index arrays (triangles if it had only triangles)."""
+    def polygons_flat(self) -> tuple[np.ndarray, np.ndarray]:
+        """The file's faces as (flat (sum(sizes),) int64, sizes (p,) int64), winding kept.
+
+        Inverse of `fan_triangulate`: each fan's first row gives (v0, v1, v2), every further row
+        adds its last vertex.
+        """
+        faces = self.faces
         if self.polygon_sizes is None:
-            return list(self.faces)
-        out, row = [], 0
-        for k in self.polygon_sizes.tolist():
-            fan = self.faces[row : row + k - 2]
-            out.append(np.concatenate([fan[0], fan[1:, 2]]))
-            row += k - 2
-        return out
+            return faces.reshape(-1), np.full(faces.shape[0], 3, dtype=np.int64)
+        sizes = self.polygon_sizes
+        n_tri = sizes - 2
+        is_first = np.zeros(faces.shape[0], dtype=bool)
+        is_first[np.cumsum(n_tri) - n_tri] = True
+        emitted = np.where(is_first, 3, 1)  # values each row contributes to flat
+        at = np.cumsum(emitted) - emitted
+        flat = np.empty(int(emitted.sum()), dtype=np.int64)
+        flat[at[is_first]] = faces[is_first, 0]
+        flat[at[is_first] + 1] = faces[is_first, 1]
+        flat[at + emitted - 1] = faces[:, 2]
+        return flat, sizes
+
+    def polygons(self) -> list[np.ndarray]:
+        """The file's faces as a list of vertex-index arrays (for small meshes and tests)."""
+        flat, sizes = self.polygons_flat()
+        return np.split(flat, np.cumsum(sizes)[:-1])
 
     def with_vertices(self, vertices: np.ndarray, name: str | None = None) -> Mesh:
         """The same faces over new vertex positions (same shape)."""
@@ -71,23 +89,25 @@ class Mesh:
                     self.coordinate_scale, self.name)
 
 
-def fan_triangulate(polygons: list[np.ndarray] | list[list[int]]
+def fan_triangulate(flat: np.ndarray, sizes: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray | None]:
-    """Fan-triangulate polygons: (faces (m, 3) int64, polygon_sizes or None if all triangles).
+    """Fan-triangulate polygons given as one flat index array, vectorised.
 
-    Polygons need >= 3 vertices; reporting shorter ones is the reader's job.
+    flat : (sum(sizes),) int64, the polygons' vertex indices one after another.
+    sizes : (p,) int64, vertices of each polygon, all >= 3 (reporting smaller ones is the
+        reader's job).
+    Returns (faces (sum(sizes - 2), 3) int64, polygon_sizes): None when every polygon is a
+    triangle, else ``sizes`` — the layout `Mesh` documents.
     """
-    sizes = np.fromiter((len(p) for p in polygons), dtype=np.int64, count=len(polygons))
-    if sizes.size and (sizes == 3).all():
-        return np.asarray(polygons, dtype=np.int64).reshape(-1, 3), None
-    tris = []
-    for p in polygons:
-        p = np.asarray(p, dtype=np.int64)
-        k = p.size
-        t = np.empty((k - 2, 3), dtype=np.int64)
-        t[:, 0] = p[0]
-        t[:, 1] = p[1:-1]
-        t[:, 2] = p[2:]
-        tris.append(t)
-    faces = np.concatenate(tris) if tris else np.empty((0, 3), dtype=np.int64)
-    return faces, sizes
+    flat = np.asarray(flat, dtype=np.int64)
+    sizes = np.asarray(sizes, dtype=np.int64)
+    if (sizes == 3).all():
+        return flat.reshape(-1, 3), None
+    first = np.cumsum(sizes) - sizes  # offset of each polygon's v0 in flat
+    n_tri = sizes - 2
+    polygon = np.repeat(np.arange(sizes.size), n_tri)
+    # row r of polygon p is (v0, v_k, v_k+1) with k = 1 + (r - first row of p)
+    k = 1 + np.arange(polygon.size) - np.repeat(np.cumsum(n_tri) - n_tri, n_tri)
+    base = first[polygon]
+    faces = np.stack([flat[base], flat[base + k], flat[base + k + 1]], axis=1)
+    return faces, sizes.copy()

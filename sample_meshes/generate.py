@@ -33,7 +33,8 @@ def rot_z(deg: float) -> np.ndarray:
 
 
 def mesh(vertices, polygons, name: str) -> Mesh:
-    faces, sizes = fan_triangulate([list(p) for p in polygons])
+    sizes = np.array([len(p) for p in polygons])
+    faces, sizes = fan_triangulate(np.concatenate([np.asarray(p) for p in polygons]), sizes)
     return Mesh(np.asarray(vertices, dtype=np.float64), faces, sizes, name=name)
 
 
