@@ -131,16 +131,14 @@ def assert_bits_equal(a: np.ndarray, b: np.ndarray) -> None:
 
 # How much of the file's structure each format gives back (by its definition / its reader).
 KEEPS = {"obj": "polygons in order", "vf": "polygons in order", "vtx": "polygons in order",
-         "ply": "polygons", "off": "surface", "stl": "float32 soup"}
+         "off": "polygons in order", "ply": "polygons", "stl": "float32 soup"}
 
 
 def test_every_writer_has_a_round_trip_expectation():
     assert set(output_formats()) == set(KEEPS)
 
 
-# OFF is read by meshio (triangles only) or trimesh (whose polygon triangulation fails under
-# numpy 2.x): the pentagon prism cannot come back from OFF (see the io report).
-ROUND_TRIPS = [(f, s) for f in sorted(KEEPS) for s in sorted(MESHES) if (f, s) != ("off", "prism")]
+ROUND_TRIPS = [(f, s) for f in sorted(KEEPS) for s in sorted(MESHES)]
 
 
 @pytest.mark.parametrize(("fmt", "shape"), ROUND_TRIPS, ids=[f"{f}-{s}" for f, s in ROUND_TRIPS])
@@ -168,7 +166,7 @@ def test_round_trip(fmt, shape, tmp_path):
 finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 
 
-@pytest.mark.parametrize("fmt", ["obj", "vf"])
+@pytest.mark.parametrize("fmt", ["obj", "vf", "off"])
 @settings(max_examples=60, deadline=None)
 @given(vertices=hnp.arrays(np.float64, st.tuples(st.integers(4, 12), st.just(3)), elements=finite))
 def test_text_coordinates_read_back_bit_identical(fmt, vertices):
@@ -179,6 +177,24 @@ def test_text_coordinates_read_back_bit_identical(fmt, vertices):
     back = read_mesh(io.BytesIO(buffer.getvalue()), format=fmt)
     assert_bits_equal(back.vertices, mesh.vertices)
     np.testing.assert_array_equal(back.faces, mesh.faces)
+
+
+@pytest.mark.parametrize("fmt", ["obj", "vf", "off"])
+@settings(max_examples=50, deadline=None)
+@given(sizes=st.lists(st.integers(3, 40), min_size=1, max_size=12), data=st.data())
+def test_text_formats_keep_any_polygon_layout(fmt, sizes, data):
+    """Polygons of any size come back as written: same sizes, same indices, same order."""
+    flat = np.array(data.draw(st.lists(st.integers(0, 19), min_size=sum(sizes),
+                                       max_size=sum(sizes))), dtype=np.int64)
+    faces, polygon_sizes = fan_triangulate(flat, np.array(sizes))
+    mesh = Mesh(np.arange(60, dtype=np.float64).reshape(20, 3) / 7, faces, polygon_sizes)
+    buffer = io.BytesIO()
+    FORMATS[fmt].writer(mesh, buffer)
+    back = read_mesh(io.BytesIO(buffer.getvalue()), format=fmt)
+    back_flat, back_sizes = back.polygons_flat()
+    np.testing.assert_array_equal(back_flat, flat)
+    np.testing.assert_array_equal(back_sizes, sizes)
+    assert_bits_equal(back.vertices, mesh.vertices)
 
 
 @settings(max_examples=80, deadline=None)
@@ -276,7 +292,7 @@ def test_obj_face_token_styles(token, tmp_path):
     np.testing.assert_array_equal(read_mesh(path).faces, TETRA_FACES)
 
 
-@pytest.mark.parametrize("fmt", ["obj", "vf"])
+@pytest.mark.parametrize("fmt", ["obj", "vf", "off"])
 def test_text_with_a_byte_order_mark(fmt, tmp_path):
     mesh = tetrahedron()
     buffer = io.BytesIO()
@@ -376,8 +392,73 @@ def test_writing_vtx_writes_the_pair(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.fac", "c.vtx"]
 
 
+# --- OFF ---------------------------------------------------------------------------------------
+TETRA_OFF = """# tetra
+OFF
+4 4 6
+0 0 0
+1 0 0
+0 1 0
+0 0 1
+3 0 2 1
+3 0 1 3
+3 0 3 2
+3 1 2 3
+"""
+TETRA_POINTS = ["0 0 0", "1 0 0", "0 1 0", "0 0 1"]
+TETRA_OFF_FACES = ["3 0 2 1", "3 0 1 3", "3 0 3 2", "3 1 2 3"]
+
+
+def test_off_reader_features(tmp_path):
+    """Comments, blank lines, indentation, CRLF, a COFF header with the counts on its line,
+    vertex colours, face colours (RGBA floats, a colour-map integer or none): all one prism."""
+    prism = pentagonal_prism()
+    polygons = [" ".join(str(i) for i in p) for p in prism.polygons()]
+    lines = ["# a pentagonal prism", "", "COFF 10 7 15  # counts on the header line"]
+    lines += [" ".join(repr(float(c)) for c in row) + " 0.5 0.5 0.5 1" for row in prism.vertices]
+    lines[5] = "\t" + lines[5] + "  # indented"
+    lines += ["", f"5 {polygons[0]} 1.0 0.0 0.0 0.75", f"5 {polygons[1]} 7"]
+    lines += [f"4 {p}" for p in polygons[2:6]] + [f"  4 {polygons[6]} 0 0 255"]
+    path = tmp_path / "prism.off"
+    path.write_bytes("\r\n".join(lines).encode())
+    back = read_mesh(path)
+    assert_bits_equal(back.vertices, prism.vertices)
+    assert [p.tolist() for p in back.polygons()] == [p.tolist() for p in prism.polygons()]
+    np.testing.assert_array_equal(back.polygon_sizes, [5, 5, 4, 4, 4, 4, 4])
+
+
+OFF_HEADERS = {
+    "OFF-line": ("OFF\n4 4 6", ""),
+    "counts-on-header-line": ("OFF 4 4 6", ""),
+    "no-blank-after-OFF": ("OFF4 4 6", ""),  # as in the ModelNet data set
+    "no-header": ("4 4 6", ""),
+    "no-edge-count": ("OFF\n4 4", ""),
+    "NOFF-normals": ("NOFF\n4 4 6", " 0 0 1"),
+    "CNOFF-normals-colours": ("CNOFF\n4 4 6", " 0 0 1 0.2 0.4 0.6 1"),
+    "STOFF-texture": ("STOFF\n4 4 6", " 0.25 0.75"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(OFF_HEADERS))
+def test_off_header_variants(case):
+    head, extra = OFF_HEADERS[case]
+    text = "\n".join([head, *(p + extra for p in TETRA_POINTS), *TETRA_OFF_FACES]) + "\n"
+    back = read_mesh(io.BytesIO(text.encode()), format="off")
+    np.testing.assert_array_equal(back.vertices, [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    np.testing.assert_array_equal(back.faces, TETRA_FACES)
+    assert back.polygon_sizes is None
+
+
+def test_reading_off_does_not_import_trimesh_or_meshio():
+    code = ("import io, sys; from massprops.io import read_mesh; "
+            f"read_mesh(io.BytesIO({TETRA_OFF.encode()!r}), format='off'); "
+            "print('trimesh' in sys.modules or 'meshio' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
 # --- streams -----------------------------------------------------------------------------------
-@pytest.mark.parametrize("fmt", ["obj", "stl", "vf", "ply"])
+@pytest.mark.parametrize("fmt", ["obj", "stl", "vf", "ply", "off"])
 def test_read_from_a_binary_stream(fmt):
     mesh = tetrahedron()
     buffer = io.BytesIO()
@@ -467,6 +548,52 @@ BAD_FILES = {
     "vf-not-utf8": ("a.vf", TETRA_VF.encode("utf-16"), MeshFormatError, "binary data"),
     "vf-latin1": ("a.vf", ("# Träger\n" + TETRA_VF).encode("latin-1"), MeshFormatError,
                   "line 1 is not UTF-8"),
+    "empty-off": ("e.off", b"", MeshFormatError, "empty"),
+    "off-vertex-count-too-large": ("a.off", TETRA_OFF.replace("4 4 6", "5 4 6"), MeshFormatError,
+                                   "ends after 3 of the 4 face lines"),
+    "off-vertex-count-too-small": ("a.off", TETRA_OFF.replace("4 4 6", "3 4 6"), MeshFormatError,
+                                   "line 7: face 1 has 0 vertex indices; expected at least 3; "
+                                   "do the counts on line 3 match the file?"),
+    "off-face-count-too-large": ("a.off", TETRA_OFF.replace("4 4 6", "4 5 6"), MeshFormatError,
+                                 "ends after 4 of the 5 face lines"),
+    "off-face-count-too-small": ("a.off", TETRA_OFF.replace("4 4 6", "4 3 6"), MeshFormatError,
+                                 "line 11: unexpected data after the last face"),
+    "off-counts-not-integer": ("a.off", TETRA_OFF.replace("4 4 6", "4.0 4 6"), MeshFormatError,
+                               "line 3: expected the counts"),
+    "off-counts-one-value": ("a.off", TETRA_OFF.replace("4 4 6", "4"), MeshFormatError,
+                             "line 3: expected the counts"),
+    "off-counts-missing": ("a.off", b"# header only\nOFF\n", MeshFormatError,
+                           "ends after the header"),
+    "off-header-garbled": ("a.off", TETRA_OFF.replace("OFF", "OFX"), MeshFormatError,
+                           "line 2: expected 'OFF' or the counts"),
+    "off-header-4d": ("a.off", TETRA_OFF.replace("OFF", "4OFF"), MeshFormatError,
+                      "line 2: OFF variant '4OFF' is not supported"),
+    "off-binary": ("a.off", TETRA_OFF.replace("OFF", "OFF BINARY"), MeshFormatError,
+                   "line 2: binary OFF is not supported"),
+    "off-only-comments": ("a.off", "# nothing here\n\n", MeshFormatError,
+                          "only comments and blank lines"),
+    "off-no-faces": ("a.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", MeshFormatError, "0 faces"),
+    "off-index-range": ("a.off", TETRA_OFF.replace("3 0 2 1", "3 0 2 4"), MeshFormatError,
+                        "line 8: vertex index 4 is out of range"),
+    "off-negative-index": ("a.off", TETRA_OFF.replace("3 0 2 1", "3 -1 2 1"), MeshFormatError,
+                           "line 8: vertex index -1 is out of range"),
+    "off-two-vertex-face": ("a.off", TETRA_OFF.replace("3 0 2 1", "2 0 2"), MeshFormatError,
+                            "line 8: face 1 has 2"),
+    "off-face-missing-index": ("a.off", TETRA_OFF.replace("3 0 2 1", "3 0 2"), MeshFormatError,
+                               "line 8: face 1 announces 3 vertex indices but lists 2"),
+    "off-size-not-integer": ("a.off", TETRA_OFF.replace("3 0 2 1", "3.0 0 2 1"),
+                             MeshFormatError, "line 8: '3.0' is not an integer"),
+    "off-index-word": ("a.off", TETRA_OFF.replace("3 0 2 1", "3 0 two 1"), MeshFormatError,
+                       "line 8: 'two' is not an integer"),
+    "off-nan": ("a.off", TETRA_OFF.replace("\n1 0 0\n", "\n1 nan 0\n"), MeshFormatError,
+                "line 5: vertex 2 has a non-finite"),
+    "off-inf": ("a.off", TETRA_OFF.replace("\n0 0 1\n", "\n0 0 -inf\n"), MeshFormatError,
+                "line 7"),
+    "off-word": ("a.off", TETRA_OFF.replace("\n1 0 0\n", "\n1 O 0\n"), MeshFormatError,
+                 "line 5: 'O' is not a number"),
+    "off-short-vertex": ("a.off", TETRA_OFF.replace("\n0 1 0\n", "\n0 1\n"), MeshFormatError,
+                         "line 6: vertex 3 of 4 has 2"),
+    "off-not-utf8": ("a.off", TETRA_OFF.encode("utf-16"), MeshFormatError, "binary data"),
     "unknown-extension": ("a.xyz", b"1 2 3", UnknownFormatError, "known: "),
     "no-extension": ("mesh", b"1 2 3", UnknownFormatError, ".obj"),
 }

@@ -1,4 +1,4 @@
-"""Every other format (PLY, OFF, VTK, glTF, ...): meshio first, then trimesh.
+"""Every other format (PLY, VTK, glTF, ...): meshio first, then trimesh.
 
 Both libraries are imported only when such a file is read (trimesh alone costs ~0.7 s of start-up).
 They are kept on a short leash: warnings silenced, their prints captured (meshio reports a failed

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 from massprops.errors import UnknownFormatError
-from massprops.io import obj, ply_off, stl, vf
+from massprops.io import obj, off, ply_off, stl, vf
 from massprops.io.fallback import FallbackReader
 from massprops.io.source import Source
 from massprops.mesh import Mesh
@@ -65,7 +65,7 @@ FORMATS: dict[str, Format] = {
     "vtx": Format((".vtx", ".fac"), vf.read_vtx_fac,
                   parts=((".vtx", vf.write_vtx), (".fac", vf.write_fac))),
     "ply": Format((".ply",), FallbackReader("ply", "ply", ".ply"), ply_off.write_ply),
-    "off": Format((".off",), FallbackReader("off", "off", ".off"), ply_off.write_off),
+    "off": Format((".off",), off.read_off, ply_off.write_off),
     "vtk": Format((".vtk",), FallbackReader("vtk", None, ".vtk")),
     "vtu": Format((".vtu",), FallbackReader("vtu", None, ".vtu")),
     "msh": Format((".msh",), FallbackReader("gmsh", None, ".msh")),

@@ -26,7 +26,7 @@ FACE_SUFFIX = ".fac"
 
 
 @dataclass
-class _Reader:
+class LineCursor:
     """A cursor over the non-blank lines of one text file."""
 
     name: str
@@ -37,7 +37,7 @@ class _Reader:
     count_lines: dict[str, int] = field(default_factory=dict)  # "vertex" -> line of its count
 
     @classmethod
-    def open(cls, source: Source, format_name: str) -> _Reader:
+    def open(cls, source: Source, format_name: str) -> LineCursor:
         data = text_content(source.read_bytes(), source.name, format_name)
         lines = TextLines.from_bytes(strip_comments(data))
         counts = lines.token_counts()
@@ -124,7 +124,7 @@ class _Reader:
 
 def read_vf(source: Source) -> Mesh:
     """Read a ``.vf`` file. Returns a Mesh (vertices in file units, polygons fan-triangulated)."""
-    reader = _Reader.open(source, "VF")
+    reader = LineCursor.open(source, "VF")
     vertices = reader.vertices()
     hint = f"; does the vertex count on line {reader.count_lines['vertex']} match the file?"
     flat, sizes = reader.faces(vertices.shape[0], hint)
@@ -144,10 +144,10 @@ def read_vtx_fac(source: Source) -> Mesh:
     except OSError as exc:
         raise read_error(source.name, exc) from exc
     vtx_path, fac_path = companion_paths(source.path, for_reading=True)
-    vtx = _Reader.open(_part_source(source, vtx_path), "VTX")
+    vtx = LineCursor.open(_part_source(source, vtx_path), "VTX")
     vertices = vtx.vertices()
     vtx.end("vertex")
-    fac = _Reader.open(_part_source(source, fac_path), "FAC")
+    fac = LineCursor.open(_part_source(source, fac_path), "FAC")
     flat, sizes = fac.faces(vertices.shape[0])
     fac.end("face")
     return _mesh(vertices, flat, sizes, source.name)
