@@ -1,4 +1,4 @@
-"""Writers for PLY (binary little-endian; read back by the fallback) and OFF (ASCII; read by off.py)."""
+"""Writers for PLY (binary little-endian, read by the fallback) and OFF (ASCII, read by off.py)."""
 
 from __future__ import annotations
 
