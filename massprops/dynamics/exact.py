@@ -1,0 +1,427 @@
+"""Exact torque-free rotation (Euler-Poinsot) and ballistic translation, in O(1) per instant.
+
+Frames and conventions: the body is described in its PRINCIPAL frame (inertia diagonal); ω' is
+the body angular velocity in that frame (rad/s); q (w, x, y, z) rotates principal -> world. Euler:
+I ω̇' + ω' × (I ω') = 0, q̇ = ½ q ⊗ (0, ω'). Nothing is stepped: every instant is evaluated
+directly, so the cost does not depend on t.
+
+The motion, for principal moments I1 <= I2 <= I3 (after sorting):
+- steady: ω' along a principal axis (or zero): ω' constant, q = q0 ⊗ exp(ω' t / 2); this also
+  holds the unstable intermediate axis exactly.
+- symmetric (two moments equal within ``SYMMETRY_RTOL``): regular precession, ω' turning about the
+  symmetry axis e_s at Ω = (I_s - I_t) ω_s / I_t, and q = exp(e_H h t / 2I_t) ⊗ q0 ⊗ exp(-e_s Ω t/2)
+  with h = |H| and e_H the world direction of H.
+- general: Jacobi elliptic functions. Label the axes (a, b, c) so that ω'_c never changes sign:
+  c = 3 when D = |H|² - 2 E I2 >= 0 (E = ½ ω'·I ω', the kinetic energy), else c = 1 (then
+  (a, b, c) = (3, -2, 1) keeps Euler's equations in their cyclic form). Then
+  ω'_a = ±A_a cn u, ω'_b = A_b sn u, ω'_c = ±A_c dn u, u = λ t + u0, with parameter m and
+  complement m1 = 1 - m ∝ D (Landau & Lifshitz, Mechanics §37). m1 = 0 is the separatrix
+  (sn = tanh, cn = dn = sech).
+  The attitude is q = q0 ⊗ B0* ⊗ exp(f_c ψ/2) ⊗ B(t): B(t) is the smallest rotation taking the
+  body direction n(t) = I ω'/h of H to the principal axis f_c = ±e_c (n·f_c > 0 always, so B is
+  never singular), and ψ is the angle about it. Kinematics give
+  ψ̇ = 2E/h - (n_a ṅ_b - n_b ṅ_a)/(1 + n_c), whose integral is elementary plus an incomplete
+  elliptic integral of the third kind with characteristic N = -I_c (I_b - I_a) / (I_a (I_c - I_b))
+  < 0, the construction of Celledoni, Fassò, Säfström & Zanna (2008), "The exact computation of
+  the free rigid body motion and its use in splitting methods", SIAM J. Sci. Comput. 30(4).
+  ψ is quasi-periodic in u: u is reduced modulo 2K and whole periods are added in closed form.
+
+Numerics: ω is scaled by a power of two (exact) so tiny and huge rates behave alike; D, which
+decides the side of the separatrix and sets m1, is computed in double-double arithmetic, so
+a start 1e-8 from the separatrix still gets m1 to full relative precision; the initial phase u0
+uses cn(u0) = |ω'_a|/A_a directly, not an angle, so it keeps its digits next to the intermediate
+axis. ``free_rotation_kernel`` and everything it calls use only floats, tuples and float arrays,
+so numba can compile them unchanged (checked: ~0.5 µs per instant compiled, ~25 µs in Python).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from massprops.dynamics.elliptic import (
+    jacobi_reduced,
+    k_from_m1,
+    legendre_f,
+    legendre_pi_minus_f,
+    rj,
+)
+from massprops.errors import UnphysicalInertiaError, UsageError
+from massprops.rotation import (
+    canonical,
+    matrix_to_quat,
+    quat_conjugate,
+    quat_multiply,
+    quat_normalize,
+)
+
+__all__ = ["NEGLIGIBLE_COMPONENT", "SYMMETRY_RTOL", "free_rotation", "free_rotation_kernel",
+           "free_rotation_step", "free_translation"]
+
+_EPS = 2.220446049250313e-16
+
+SYMMETRY_RTOL = 8 * _EPS
+"""Two principal moments whose difference is at most this times the largest are treated as equal
+(closed-form regular precession). The elliptic formulas divide by such a difference and are exact
+for any non-zero one, so this only catches round-off-level asymmetry (moments of a symmetric part
+computed from a mesh differ by a few ulps); the symmetric solution then differs from the exact one
+of the given moments by at most ~SYMMETRY_RTOL·|ω|·t (2e-13 rad at |ω|t = 100), below the target
+accuracy. Any larger asymmetry goes through the elliptic branch, which resolves it exactly."""
+
+NEGLIGIBLE_COMPONENT = 2.0 ** -450
+"""Components of ω' smaller than this (3.5e-136) times the largest are set to zero. Their squares,
+times a moment difference, would underflow the separatrix distance below; the motion they would
+start differs from the computed one by at most this relative amount, except on the unstable
+intermediate axis, which the exact motion would leave only after about ln(2^450)/λ = 312/λ
+(λ the instability rate, ~|ω|): the result keeps the body on the axis beyond that."""
+
+
+# --- double-double arithmetic (Dekker), for the separatrix distance ------------------------------
+def _two_sum(a: float, b: float) -> tuple[float, float]:
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+def _two_prod(a: float, b: float) -> tuple[float, float]:
+    p = a * b
+    ca, cb = 134217729.0 * a, 134217729.0 * b
+    ah, bh = ca - (ca - a), cb - (cb - b)
+    al, bl = a - ah, b - bh
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def _dd_mul(hi: float, lo: float, b: float) -> tuple[float, float]:
+    p, e = _two_prod(hi, b)
+    return _two_sum(p, e + lo * b)
+
+
+def _dd_term(i: float, i_hi: float, i_lo: float, w: float) -> tuple[float, float]:
+    """i · (i_hi + i_lo) · w², in double-double."""
+    hi, lo = _dd_mul(i_hi, i_lo, i)
+    hi, lo = _dd_mul(hi, lo, w)
+    return _dd_mul(hi, lo, w)
+
+
+def _separatrix_distance(i1: float, i2: float, i3: float, w1: float, w3: float) -> float:
+    """D = |H|² - 2 E I2 = I3 (I3 - I2) w3² - I1 (I2 - I1) w1², correctly rounded in practice.
+
+    Both products and the final difference are carried in double-double (error ~1e-32 of the
+    terms), because D is a difference of nearly equal terms next to the separatrix and its
+    relative error becomes that of m1, hence of the period.
+    """
+    d32_hi, d32_lo = _two_sum(i3, -i2)
+    d21_hi, d21_lo = _two_sum(i2, -i1)
+    a_hi, a_lo = _dd_term(i3, d32_hi, d32_lo, w3)
+    b_hi, b_lo = _dd_term(i1, d21_hi, d21_lo, w1)
+    s, e = _two_sum(a_hi, -b_hi)
+    return s + (e + (a_lo - b_lo))
+
+
+# --- small quaternion kernels on tuples -----------------------------------------------------------
+def _qmul(a: tuple, b: tuple) -> tuple[float, float, float, float]:
+    return (a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+            a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+            a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+            a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0])
+
+
+def _qexp(x: float, y: float, z: float, angle: float) -> tuple[float, float, float, float]:
+    """Rotation by ``angle`` (rad) about the UNIT axis (x, y, z)."""
+    s = math.sin(0.5 * angle)
+    return math.cos(0.5 * angle), s * x, s * y, s * z
+
+
+def _store(out_q: np.ndarray, out_w: np.ndarray, k: int, q: tuple, w1: float, w2: float,
+           w3: float, scale: float) -> None:
+    """Normalise q into out_q[k] and write ω·scale into out_w[k]."""
+    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    for i in range(4):
+        out_q[k, i] = q[i] / norm
+    out_w[k, 0], out_w[k, 1], out_w[k, 2] = w1 * scale, w2 * scale, w3 * scale
+
+
+def _to_axis(n1: float, n2: float, n3: float, axis: int, sign: float) -> tuple:
+    """The smallest rotation taking the unit vector n to f = sign·e_axis (n·f > -1 assumed):
+    the quaternion (1 + n·f, n × f), normalised."""
+    if axis == 2:
+        q = (1.0 + sign * n3, sign * n2, -sign * n1, 0.0)
+    else:
+        q = (1.0 + sign * n1, 0.0, sign * n3, -sign * n2)
+    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    return q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm
+
+
+# --- the three kinds of motion (scaled units: largest moment and largest |ω'_i| in [1/2, 1)) ------
+def _steady_into(q0, w, times, scale, out_q, out_w) -> None:
+    """ω' constant (zero, or along a principal axis): q = q0 ⊗ exp(ω' t / 2)."""
+    rate = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    for k in range(times.shape[0]):
+        if rate == 0.0:
+            q = (q0[0], q0[1], q0[2], q0[3])
+        else:
+            q = _qmul(q0, _qexp(w[0] / rate, w[1] / rate, w[2] / rate, rate * times[k]))
+        _store(out_q, out_w, k, q, w[0], w[1], w[2], scale)
+
+
+def _symmetric_into(inertia, q0, w, times, scale, axis, out_q, out_w) -> None:
+    """Regular precession about the symmetry axis e_axis (0 or 2) of a body with two equal moments.
+
+    ω'(t) = R(e_s, Ω t) ω'(0), Ω = (I_s - I_t) ω_s / I_t; q(t) = exp(e_H h t/(2 I_t)) ⊗ q0 ⊗
+    exp(-e_s Ω t / 2). Exact for the body with transverse moment I_t (the mean of the equal pair).
+    """
+    if axis == 2:
+        i_t, i_s = 0.5 * (inertia[0] + inertia[1]), inertia[2]
+        t1, t2 = 0, 1
+    else:
+        i_t, i_s = 0.5 * (inertia[1] + inertia[2]), inertia[0]
+        t1, t2 = 1, 2
+    omega = (i_s - i_t) / i_t * w[axis]
+    n = [i_t * w[0], i_t * w[1], i_t * w[2]]
+    n[axis] = i_s * w[axis]
+    h = math.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+    # World direction of H: q0 (0, n/h) q0*.
+    e_h = _qmul(_qmul(q0, (0.0, n[0] / h, n[1] / h, n[2] / h)),
+                (q0[0], -q0[1], -q0[2], -q0[3]))
+    e_s = [0.0, 0.0, 0.0]
+    e_s[axis] = 1.0
+    for k in range(times.shape[0]):
+        t = times[k]
+        spin = _qexp(e_s[0], e_s[1], e_s[2], -omega * t)
+        q = _qmul(_qmul(_qexp(e_h[1], e_h[2], e_h[3], h * t / i_t), q0), spin)
+        c, s = math.cos(omega * t), math.sin(omega * t)
+        wt = [w[0], w[1], w[2]]
+        wt[t1] = c * w[t1] - s * w[t2]
+        wt[t2] = s * w[t1] + c * w[t2]
+        _store(out_q, out_w, k, q, wt[0], wt[1], wt[2], scale)
+
+
+def _pi_minus_f(nc, u, j, s, c, d, m1, pimf_complete) -> float:
+    """Π(nc; am u | m) - u, from u = 2jK + ur and sn, cn, dn at ur (or, on the separatrix
+    m1 = 0, from Π(nc; am u | 1) - u = (a atan(a tanh u) - a² u)/(1 + a²), a² = -nc)."""
+    if m1 > 0.0:
+        return 2.0 * j * pimf_complete + legendre_pi_minus_f(nc, s, c, d)
+    a = math.sqrt(-nc)
+    return (a * math.atan(a * s) - a * a * u) / (1.0 - nc)
+
+
+def _twist(u, j, s, c, d, m1, h, kappa, d0sq, n_char, nc, pimf_complete) -> float:
+    """J(u) = ∫₀^u (h dn - κ dn²)/(1 - N sn²) du, N = n_char < 0, by one of two equal forms.
+
+    (j, s, c, d): u = 2jK + ur with sn, cn, dn at ur; h² = D0 + κ² with D0 = d0sq = (I_a A_a)².
+    |N| <= 1 (nc = N): J = h G(am u) - κ u - (h²/κ)(Π(N; am u) - u), G(φ) = ∫₀^φ dθ/(1 - N sin²θ).
+    N < -1 (nc = m/N = -D0/κ²): the terms above grow like 1/sqrt(I_c - I_b) while J does not, so
+    by Π(N) + Π(m/N) = F + atan2(s sqrt(pq), c d)/sqrt(pq) (p = 1 - N, q = 1 - m/N = h²/κ²,
+    DLMF 19.7.9) J = (h/√p) atan2(-√p s c (h - κ d), κ c² d + h p s²) + (D0/κ) u
+    + (h²/κ)(Π(m/N; am u) - u), every term of the size of J itself; h - κ d is formed as
+    D0 (1 - N s²)/(h + κ d) to avoid cancellation.
+    """
+    pimf = _pi_minus_f(nc, u, j, s, c, d, m1, pimf_complete)
+    p = 1.0 - n_char
+    sqrt_p = math.sqrt(p)
+    if nc == n_char:
+        g = (j * math.pi + math.atan2(sqrt_p * s, c)) / sqrt_p
+        return h * g - kappa * u - h * h / kappa * pimf
+    h_minus_kd = d0sq * (1.0 - n_char * s * s) / (h + kappa * d)
+    angle = math.atan2(-sqrt_p * s * c * h_minus_kd, kappa * c * c * d + h * p * s * s)
+    return h / sqrt_p * angle + d0sq / kappa * u + h * h / kappa * pimf
+
+
+def _labelled(inertia, w) -> tuple:
+    """The labelling (a, b, c) of the axes in which ω'_c keeps its sign, from the side of the
+    separatrix: (axis of c in the principal frame, I_a, I_b, I_c, ω'_a, ω'_b, ω'_c,
+    |I_b - I_a|, |I_c - I_b|, |D|)."""
+    i1, i2, i3 = inertia[0], inertia[1], inertia[2]
+    dist = _separatrix_distance(i1, i2, i3, w[0], w[2])
+    if dist >= 0.0:  # c = 3: ω'_3 keeps its sign
+        return 2, i1, i2, i3, w[0], w[1], w[2], i2 - i1, i3 - i2, dist
+    # c = 1 in the frame (e3, -e2, e1), where Euler's equations keep their cyclic form.
+    return 0, i3, i2, i1, w[2], -w[1], w[0], i3 - i2, i2 - i1, -dist
+
+
+def _phase(ia, ib, ic, wa, wb, wc, gba, gcb, gca, dist) -> tuple:
+    """Amplitudes and phase of ω'_a = s_a A_a cn u, ω'_b = A_b sn u, ω'_c = s_c A_c dn u,
+    u = λ t + u0: returns (s_a, s_c, A_a, A_b, A_c, m, m1, K, λ, u0, sn u0, cn u0, dn u0)."""
+    sa = 1.0 if wa >= 0.0 else -1.0
+    sc = 1.0 if wc >= 0.0 else -1.0
+    r_ab = math.sqrt(ib * gcb / (ia * gca))
+    amp_a = math.hypot(wa, r_ab * wb)
+    amp_b = math.hypot(wa / r_ab, wb)
+    amp_c = math.hypot(wc, math.sqrt(ib * gba / (ic * gca)) * wb)
+    m1 = min(1.0, dist / (ic * gcb * amp_c * amp_c))
+    m = 1.0 - m1 if m1 < 0.5 else ia * gba / (ic * gcb) * (amp_a / amp_c) ** 2
+    sigma = 1.0 if ic > ib else -1.0
+    lam = sa * sc * sigma * amp_c * math.sqrt(gcb * gca / (ia * ib))
+    # sn(u0) = ω'_b/A_b and cn(u0) = |ω'_a|/A_a keep full relative precision, even next to the
+    # intermediate axis where the angle am(u0) is within 1e-8 of ±π/2.
+    s0, c0 = wb / amp_b, abs(wa) / amp_a
+    r0 = math.hypot(s0, c0)
+    s0, c0 = s0 / r0, c0 / r0
+    if m1 > 0.0 and c0 * c0 + m1 * s0 * s0 > 0.0:
+        kk = k_from_m1(m1)
+        u0 = legendre_f(s0, c0, m1)
+    else:  # the separatrix (or m1 below the underflow threshold): am = gd, sinh u0 = tan φ0
+        m1, m, kk = 0.0, 1.0, math.inf
+        u0 = math.asinh(s0 / c0)
+    d0 = math.sqrt(c0 * c0 + m1 * s0 * s0)
+    return sa, sc, amp_a, amp_b, amp_c, m, m1, kk, lam, u0, s0, c0, d0
+
+
+def _elliptic_into(inertia, q0, w, times, scale, out_q, out_w) -> None:
+    """The general asymmetric body (I1 < I2 < I3 strictly, ω' not along an axis)."""
+    i1, i2, i3 = inertia[0], inertia[1], inertia[2]
+    axis, ia, ib, ic, wa, wb, wc, gba, gcb, dist = _labelled(inertia, w)
+    gca = i3 - i1
+    sa, sc, amp_a, amp_b, amp_c, m, m1, kk, lam, u0, s0, c0, d0 = _phase(
+        ia, ib, ic, wa, wb, wc, gba, gcb, gca, dist)
+    # Attitude: h = |H|, κ = I_c A_c, D0 = (I_a A_a)², N; ψ = 2E t/h - pref (J(u) - J(u0)).
+    kappa = ic * amp_c
+    d0sq = (ia * amp_a) ** 2
+    h = math.sqrt(d0sq + kappa * kappa)
+    two_e = i1 * w[0] * w[0] + i2 * w[1] * w[1] + i3 * w[2] * w[2]
+    n_char = -ic * gba / (ia * gcb)
+    nc = n_char if n_char >= -1.0 else -d0sq / (kappa * kappa)
+    pimf_complete = nc / 3.0 * rj(0.0, m1, 1.0, 1.0 - nc) if m1 > 0.0 and nc != 0.0 else 0.0
+    pref = sa * sc * math.sqrt(ib * gca / (ia * gcb)) / h
+    consts = (m1, h, kappa, d0sq, n_char, nc, pimf_complete)
+    j0 = _twist(u0, 0.0, s0, c0, d0, *consts)
+    b0 = _to_axis(i1 * w[0] / h, i2 * w[1] / h, i3 * w[2] / h, axis, sc)
+    q_c = _qmul(q0, (b0[0], -b0[1], -b0[2], -b0[3]))
+    fx, fz = (0.0, sc) if axis == 2 else (sc, 0.0)
+    for k in range(times.shape[0]):
+        t = times[k]
+        u = lam * t + u0
+        j, s, c, d = jacobi_reduced(u, m, m1, kk)
+        sign = -1.0 if j % 2.0 != 0.0 else 1.0
+        va, vb, vc = sa * amp_a * sign * c, amp_b * sign * s, sc * amp_c * d
+        w1, w2, w3 = (va, vb, vc) if axis == 2 else (vc, -vb, va)
+        psi = two_e / h * t - pref * (_twist(u, j, s, c, d, *consts) - j0)
+        b = _to_axis(i1 * w1 / h, i2 * w2 / h, i3 * w3 / h, axis, sc)
+        q = _qmul(_qmul(q_c, _qexp(fx, 0.0, fz, psi)), b)
+        _store(out_q, out_w, k, q, w1, w2, w3, scale)
+
+
+def free_rotation_kernel(inertia, q0, w0, times, out_q, out_w) -> None:
+    """The unchecked kernel of ``free_rotation``, for hot loops (numba-compilable as is).
+
+    inertia (3,) kg·m², ascending, > 0; q0 (4,) unit, principal -> world; w0 (3,) rad/s,
+    principal frame; times (k,) s; all float64 and NOT validated. Fills out_q (k, 4) with unit
+    quaternions (sign continuous in t, not made canonical) and out_w (k, 3) with ω' in rad/s.
+    Scales inertia and ω' by powers of two (exact) and picks the kind of motion.
+    """
+    big = max(abs(w0[0]), abs(w0[1]), abs(w0[2]))
+    e_w = math.frexp(big)[1] if big > 0.0 else 0
+    e_i = math.frexp(inertia[2])[1]
+    w = np.empty(3)
+    moments = np.empty(3)
+    for i in range(3):
+        w[i] = math.ldexp(w0[i], -e_w)
+        if abs(w[i]) < NEGLIGIBLE_COMPONENT:
+            w[i] = 0.0
+        moments[i] = math.ldexp(inertia[i], -e_i)
+    tau = np.empty(times.shape[0])
+    for k in range(times.shape[0]):
+        tau[k] = math.ldexp(times[k], e_w)
+    scale = math.ldexp(1.0, e_w)
+    zeros = 0
+    for i in range(3):
+        if w[i] == 0.0:
+            zeros += 1
+    if zeros >= 2:
+        _steady_into(q0, w, tau, scale, out_q, out_w)
+    elif moments[1] - moments[0] <= SYMMETRY_RTOL * moments[2]:
+        _symmetric_into(moments, q0, w, tau, scale, 2, out_q, out_w)
+    elif moments[2] - moments[1] <= SYMMETRY_RTOL * moments[2]:
+        _symmetric_into(moments, q0, w, tau, scale, 0, out_q, out_w)
+    else:
+        _elliptic_into(moments, q0, w, tau, scale, out_q, out_w)
+
+
+# --- public functions ----------------------------------------------------------------------------
+def _vector(x, name: str, n: int) -> np.ndarray:
+    a = np.asarray(x, dtype=np.float64)
+    if a.shape != (n,):
+        raise UsageError(f"expected {name} of shape ({n},), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise UsageError(f"expected finite {name}, got {a.tolist()}")
+    return a
+
+
+def _moments(inertia) -> np.ndarray:
+    moments = _vector(inertia, "inertia (principal moments)", 3)
+    if not np.all(moments > 0):
+        raise UnphysicalInertiaError(
+            f"expected positive principal moments, got {moments.tolist()}; "
+            "a rigid body has I1, I2, I3 > 0 (kg·m²)")
+    return moments
+
+
+def _sorting_rotation(moments: np.ndarray) -> np.ndarray | None:
+    """A proper signed permutation P with Pᵀ diag(moments) P ascending, or None if already so.
+
+    Columns of P are the given axes in ascending-moment order (one negated if the permutation is
+    odd), so v_given = P v_sorted and q_sorted = q_given ⊗ quat(P).
+    """
+    order = np.argsort(moments, kind="stable")
+    if np.all(order == np.arange(3)):
+        return None
+    p = np.eye(3)[:, order]
+    if np.linalg.det(p) < 0:
+        p[:, 0] = -p[:, 0]
+    return p
+
+
+def free_rotation(inertia, q0, omega0, t) -> tuple[np.ndarray, np.ndarray]:
+    """The exact torque-free motion of a rigid body at the instants ``t``.
+
+    inertia : (3,) float, kg·m², principal moments (> 0; any order, ascending is the convention).
+    q0 : (4,) float, [w, x, y, z], principal frame -> world at t = 0 (normalised here).
+    omega0 : (3,) float, rad/s, angular velocity at t = 0 in the principal frame.
+    t : (...) float, s, any instants (negative allowed); the cost per instant does not depend on t.
+    Returns (q, omega): q (..., 4) unit, canonical (w >= 0), principal -> world; omega (..., 3)
+    rad/s in the principal frame. Accuracy (against a 40-digit Taylor integration): <= 3e-14 at
+    |ω| t = 100, relative to |ω| and in rad, growing like 2e-16 |ω| t; the same for
+    near-symmetric bodies and for starts within 1e-8 of the separatrix.
+    """
+    moments = _moments(inertia)
+    q0 = quat_normalize(_vector(q0, "q0", 4))
+    w0 = _vector(omega0, "omega0", 3)
+    times = np.asarray(t, dtype=np.float64)
+    if not np.all(np.isfinite(times)):
+        raise UsageError("expected finite times t (s), got inf or NaN")
+    perm = _sorting_rotation(moments)
+    if perm is not None:
+        q_perm = matrix_to_quat(perm)
+        q0 = quat_multiply(q0, q_perm)
+        w0 = perm.T @ w0
+        moments = moments[np.argsort(moments, kind="stable")]
+    flat = times.reshape(-1)
+    out_q = np.empty((flat.size, 4))
+    out_w = np.empty((flat.size, 3))
+    free_rotation_kernel(moments, q0, w0, flat, out_q, out_w)
+    if perm is not None:
+        out_q = quat_multiply(out_q, quat_conjugate(q_perm))
+        out_w = out_w @ perm.T
+    return (canonical(out_q).reshape(times.shape + (4,)), out_w.reshape(times.shape + (3,)))
+
+
+def free_rotation_step(inertia, q, omega, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Advance one torque-free state by dt (s): the exact flow, for splitting integrators.
+
+    inertia (3,) kg·m² principal moments; q (4,) principal -> world; omega (3,) rad/s principal
+    frame. Returns (q (4,), omega (3,)) at t + dt, q canonical. Same kernel as free_rotation.
+    """
+    q_new, w_new = free_rotation(inertia, q, omega, float(dt))
+    return q_new, w_new
+
+
+def free_translation(r0, v0, g, t) -> tuple[np.ndarray, np.ndarray]:
+    """Ballistic motion of the centre of mass under a constant force per unit mass.
+
+    r0 : (3,) m, v0 : (3,) m/s, g : (3,) m/s², all world frame; t : (...) s.
+    Returns r (..., 3) = r0 + v0 t + g t²/2 and v (..., 3) = v0 + g t.
+    """
+    r0, v0, g = _vector(r0, "r0", 3), _vector(v0, "v0", 3), _vector(g, "g", 3)
+    tt = np.asarray(t, dtype=np.float64)[..., None]
+    return r0 + tt * (v0 + 0.5 * tt * g), v0 + tt * g
