@@ -2,7 +2,8 @@
 
 One module per format family (``obj``, ``stl``, ``vf``, ``off``, ``ply_off`` writers,
 ``fallback`` for everything meshio or trimesh reads); ``registry.FORMATS`` lists them, one line
-each, and the CLI's choices derive from it. meshio and trimesh are imported only when a fallback format is read.
+each, and the CLI's choices derive from it. meshio and trimesh are imported only when a fallback
+format is read.
 """
 
 from __future__ import annotations
