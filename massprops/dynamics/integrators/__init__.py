@@ -1,0 +1,77 @@
+"""The integrator family: a plain registry of methods that step the Newton-Euler state.
+
+``INTEGRATORS`` maps a name to an `IntegratorSpec` (name, kind, order, description, run_segment,
+stiff). The simulate module splits [0, duration] at the force windows' edges
+(``ForceProgram.breakpoints``) and calls, for each segment with no discontinuity inside::
+
+    err, t_reached = spec.run_segment(y, t0, t1, setting, program_arrays, rot_only,
+                                      t_out, y_out, stats)
+
+The contract every implementation keeps (a new method, e.g. a splitting scheme, adds one module
+with one ``SPEC`` and one line in ``_BUILT_IN`` below):
+
+1. ``y`` : (ny,) float64, the state at ``t0``: ny = 13 [r world m, v world m/s, q principal->world
+   (w, x, y, z), omega principal rad/s] or, with ``rot_only``, ny = 7 [q, omega] (translation is
+   then closed form and handled by the caller). It is overwritten in place with the state at
+   ``t_reached``. The quaternion is re-normalised after every step (projection).
+2. ``t_reached`` == ``t1`` unless the method failed; the state is then the last finite one.
+3. ``setting`` : for ``kind == "fixed"`` the step h > 0 (s); the segment is done in
+   n = ceil((t1 - t0) / h) equal steps (ratios within 1e-12 of an integer round down), so it
+   lands exactly on t1 and a window shorter than h is still resolved (an implicit method may
+   cut a step into pieces where its Newton iteration fails; step ends stay on that grid).
+   For ``kind == "adaptive"`` the relative tolerance rtol; the absolute tolerance of
+   component i is rtol × S_b, S_b the largest |component| block b (r, v, q or omega) has had
+   in this segment so far (its start, the accepted steps and the trial step's end), and 1 for
+   the quaternion: each block's error is relative to that block's own size, so a component
+   passing through zero needs no extra care.
+4. ``program_arrays`` : (active (k,) bool, codes (k,) int64, params (k, NPAR) float64, mass kg,
+   inertia (3,) kg·m²), from ``ForceProgram`` and ``ForceProgram.active``; the kernels call
+   ``forces.rhs`` with them and never look inside.
+5. ``t_out`` : (n_out,) float64 sorted times within [t0, t1]; ``y_out`` : (n_out, ny) float64,
+   filled with the state at those times by dense output, not the nearest step: DOP853's own 7th
+   order interpolant, Radau's collocation polynomial, a cubic Hermite interpolant from the step
+   end values and derivatives for the other fixed-step methods. The interpolated quaternion is
+   re-normalised. Rows after ``t_reached`` are NaN.
+6. ``stats`` : (5,) int64 [steps, nfev, rejected, njev, status], accumulated (+=); status is set
+   to 1 if a NaN/inf appeared (the step is abandoned, the state is the last finite one), 2 if the
+   step fell below 1e-14 × max(|t|, t1 - t0) (stiffness or a singularity). Callers check
+   status (and ``t_reached < t1``) after every call.
+7. ``err`` : float, the segment's accumulated local error estimate: max-norm in absolute units of
+   the state, summed over the steps. Each module's docstring says how it is estimated. The
+   global error estimate is the caller's job. On failure it covers the steps taken (possibly 0).
+8. All stepping happens inside one numba-compiled function per method (``@njit(cache=True)``):
+   one Python call per segment, never per step; work arrays are allocated once per segment.
+9. ``run_segment`` checks its arguments (once per segment) and raises
+   `massprops.errors.UsageError` naming the integrator, what was expected and what came.
+
+The methods: ``rk4`` (fixed, order 4), ``dop853`` (adaptive, order 8), ``implicit`` (Radau IIA,
+fixed, order 5, L-stable: damps a stiff mode out), ``midpoint`` (implicit midpoint, fixed,
+order 2, symplectic: keeps a stiff linear mode's energy, aliases its phase). ``spec.stiff``
+marks the ones stable far beyond the explicit step limit.
+
+Caching: numba's on-disk cache (``__pycache__/*.nbi, *.nbc``) is keyed on the source file of
+each kernel only. After editing a file a kernel calls into (``forces.py``, ``_shared.py``,
+``_newton.py``, ``_dop853_tableau.py``) delete those cache files, or the kernels keep the old
+code. A fresh clone has no cache; the first run compiles the four kernels (~20 s CPU), later
+runs load them in well under a second.
+"""
+
+from __future__ import annotations
+
+from massprops.dynamics.integrators import dop853, midpoint, radau, rk4
+from massprops.dynamics.integrators.base import IntegratorSpec
+
+_BUILT_IN: tuple[IntegratorSpec, ...] = (rk4.SPEC, dop853.SPEC, radau.SPEC, midpoint.SPEC)
+
+INTEGRATORS: dict[str, IntegratorSpec] = {spec.name: spec for spec in _BUILT_IN}
+"""name -> IntegratorSpec; the CLI's choices and the scene's ``time.integrator`` come from here."""
+
+
+def register(spec: IntegratorSpec) -> None:
+    """Add ``spec`` to `INTEGRATORS`; a name can be registered once."""
+    if spec.name in INTEGRATORS:
+        raise ValueError(f"integrator {spec.name!r} is already registered")
+    INTEGRATORS[spec.name] = spec
+
+
+__all__ = ["INTEGRATORS", "IntegratorSpec", "register"]

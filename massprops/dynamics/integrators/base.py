@@ -1,0 +1,112 @@
+"""What every integrator is: the `IntegratorSpec` record, the stats layout, and the checked Python
+entry point `segment_runner` that wraps a method's compiled kernel (see the package docstring for
+the contract)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from massprops.errors import UsageError
+
+# --- stats : (5,) int64, accumulated (+=) by every kernel -----------------------------------------
+STEPS, NFEV, REJECTED, NJEV, STATUS = range(5)
+"""Indices into ``stats``: accepted steps, right-hand-side evaluations, rejected steps (adaptive
+error test or failed Newton iterations), Jacobian evaluations, status."""
+
+STATUS_OK, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW = 0, 1, 2
+"""``stats[STATUS]``: 0 fine; 1 a NaN/inf appeared (the state is the last finite one); 2 the step
+fell below round-off (1e-14 of the time scale): the problem is stiff or singular there."""
+
+KINDS = ("fixed", "adaptive")
+
+RunSegment = Callable[..., tuple[float, float]]
+"""run_segment(y, t0, t1, setting, program_arrays, rot_only, t_out, y_out, stats) -> (err, t)."""
+
+
+@dataclass(frozen=True)
+class IntegratorSpec:
+    """One entry of the `INTEGRATORS` registry.
+
+    name : registry key, what ``time.integrator`` and ``--integrator`` accept.
+    kind : "fixed" (``setting`` is the step h, s) or "adaptive" (``setting`` is rtol).
+    order : classical order of the step-point values.
+    description : one line, shown in ``--help``.
+    run_segment : the checked entry point (`segment_runner`), see the package docstring.
+    stiff : stable far beyond the explicit step limit (~2.8 / ForceProgram.stiffest_rate).
+    """
+
+    name: str
+    kind: str
+    order: int
+    description: str
+    run_segment: RunSegment
+    stiff: bool = False
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"integrator {self.name!r}: kind must be one of {KINDS}, "
+                             f"got {self.kind!r}")
+        if "\n" in self.description:
+            raise ValueError(f"integrator {self.name!r}: the description must be one line")
+
+
+def segment_runner(name: str, kind: str, kernel) -> RunSegment:
+    """The contract's ``run_segment`` for ``kernel``: checks the arguments once per segment (not
+    per step), then hands everything to the compiled kernel.
+
+    kernel(y, t0, t1, setting, active, codes, params, mass, inertia, rot_only, t_out, y_out,
+    stats) -> (err, t_reached), compiled with numba.
+    """
+    what = "step" if kind == "fixed" else "rtol"
+    fix = "time.step (or --step)" if kind == "fixed" else "time.rtol (or --rtol)"
+
+    def run_segment(y, t0, t1, setting, program_arrays, rot_only, t_out, y_out, stats):
+        t0, t1, setting, rot_only = float(t0), float(t1), float(setting), bool(rot_only)
+        if not (math.isfinite(setting) and setting > 0):
+            raise UsageError(f"integrator {name}: expected a {what} > 0, got {setting!r}; "
+                             f"set {fix} to a positive number")
+        if kind == "adaptive" and setting < 1e-15:
+            raise UsageError(f"integrator {name}: rtol {setting!r} is below round-off "
+                             f"(2.2e-16); set {fix} to at least 1e-15")
+        _check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats)
+        active, codes, params, mass, inertia = program_arrays
+        return kernel(y, t0, t1, setting, active, codes, params, float(mass), inertia,
+                      rot_only, t_out, y_out, stats)
+
+    run_segment.__name__ = f"run_segment_{name}"
+    run_segment.__doc__ = (f"Advance y in place from t0 to t1 with {name} ({kind}; setting = "
+                           f"{what}); see massprops.dynamics.integrators for the contract.")
+    return run_segment
+
+
+def _check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats) -> None:
+    """Shapes and dtypes of the contract, each failure one line naming what was expected."""
+    ny = 7 if rot_only else 13
+    if not (isinstance(y, np.ndarray) and y.dtype == np.float64 and y.shape == (ny,)):
+        raise UsageError(f"integrator {name}: expected y as a ({ny},) float64 array "
+                         f"(rot_only={rot_only}), got {_describe(y)}")
+    if not (math.isfinite(t0) and math.isfinite(t1) and t1 >= t0):
+        raise UsageError(f"integrator {name}: expected finite t0 <= t1, got [{t0!r}, {t1!r}]")
+    if not (isinstance(t_out, np.ndarray) and t_out.ndim == 1 and t_out.dtype == np.float64):
+        raise UsageError(f"integrator {name}: expected t_out as an (n,) float64 array, "
+                         f"got {_describe(t_out)}")
+    if t_out.size and (t_out[0] < t0 or t_out[-1] > t1 or np.any(np.diff(t_out) < 0)):
+        raise UsageError(f"integrator {name}: expected t_out sorted within [{t0!r}, {t1!r}], "
+                         f"got values from {t_out.min()!r} to {t_out.max()!r}")
+    if not (isinstance(y_out, np.ndarray) and y_out.dtype == np.float64
+            and y_out.shape == (t_out.size, ny)):
+        raise UsageError(f"integrator {name}: expected y_out as a ({t_out.size}, {ny}) float64 "
+                         f"array, got {_describe(y_out)}")
+    if not (isinstance(stats, np.ndarray) and stats.dtype == np.int64 and stats.shape == (5,)):
+        raise UsageError(f"integrator {name}: expected stats as a (5,) int64 array, "
+                         f"got {_describe(stats)}")
+
+
+def _describe(a) -> str:
+    if isinstance(a, np.ndarray):
+        return f"shape {a.shape} dtype {a.dtype}"
+    return type(a).__name__
