@@ -185,9 +185,9 @@ class RegistryChoice(click.ParamType):
 
 
 def _integrator_names() -> tuple[str, ...]:
-    from massprops.dynamics.integrators import INTEGRATORS
+    from massprops.dynamics.integrators import integrator_names
 
-    return ("auto", *sorted(INTEGRATORS))
+    return integrator_names()
 
 
 class _Progress:

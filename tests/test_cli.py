@@ -9,7 +9,6 @@ import sys
 
 import numpy as np
 import pytest
-
 from conftest import CUBE_QUADS, SAMPLES, box_vf, json_lines, rot_z, vf_text
 
 # The notes' cuboid (slide 14), from its definition: 3×2×2, turned 30° about z.

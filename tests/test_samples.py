@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import SAMPLES, rot_z
+
 from massprops.analysis import inspect_file
 
 

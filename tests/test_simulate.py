@@ -6,10 +6,20 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import CUBE_QUADS, CUBE_VERTS, json_lines, vf_text
-from massprops.dynamics.model import (Drag, Gravity, InitialState, OutputSettings, PointForce,
-                                      RigidBody, Scene, Spring, TimeSettings, Torque)
+
+from massprops.dynamics.model import (
+    Drag,
+    Gravity,
+    InitialState,
+    OutputSettings,
+    PointForce,
+    RigidBody,
+    Scene,
+    Spring,
+    TimeSettings,
+    Torque,
+)
 from massprops.dynamics.simulate import simulate
 from massprops.errors import DivergenceError
 from massprops.rotation import quat_from_axis_angle, quat_to_matrix, rotation_angle_between
@@ -136,13 +146,21 @@ def test_stiff_explicit_reports_divergence():
     assert "t = " in str(info.value) and "implicit" in str(info.value)
 
 
-def test_stiff_auto_picks_implicit_and_stays_bounded():
-    sc = scene(forces=[Spring(np.zeros(3), 1e8), Gravity(np.array([0, 0, -9.81]))],
-               duration=10.0, initial=InitialState(position=np.array([1e-3, 0, 0])))
+def test_strong_damper_auto_picks_implicit_and_matches_closed_form():
+    # m = 1 (unit body), k = 1e4, c = 1e6: overdamped, fast rate c/m = 1e6 would take ~3.6e6
+    # explicit steps over 10 s, so auto must go implicit; the slow root carries the motion
+    unit = RigidBody.from_inertia(1.0, np.eye(3))
+    k, c, x0, t = 1e4, 1e6, 1e-3, 10.0
+    sc = scene(body=unit, forces=[Spring(np.zeros(3), k, damping=c)], duration=t,
+               initial=InitialState(position=np.array([x0, 0, 0])))
     res = simulate(sc)
     assert res.integrator == "implicit"
+    disc = math.sqrt(c * c - 4 * k)
+    slow, fast = (-c + disc) / 2, (-c - disc) / 2
+    x = x0 * fast / (fast - slow) * math.exp(slow * t)  # the fast term is e^-1e7: gone
+    assert final(res)["position"][0] == pytest.approx(x, rel=1e-6)
     e = res.trajectory.energy
-    assert np.all(np.isfinite(e)) and e[-1] <= e[0] * (1 + 1e-9)
+    assert np.all(np.isfinite(e)) and np.all(np.diff(e) <= 1e-12 * e[0])
 
 
 def test_drag_makes_energy_null_and_decays():

@@ -53,11 +53,9 @@ from massprops.dynamics.yamlnodes import (
 )
 from massprops.errors import InputError, SceneError, UnphysicalInertiaError
 
-__all__ = ["FORCE_TYPES", "FRAMES", "KNOWN_INTEGRATORS", "OUTPUT_SUFFIXES", "load_scene",
+__all__ = ["FORCE_TYPES", "FRAMES", "OUTPUT_SUFFIXES", "load_scene",
            "parse_scene"]
 
-KNOWN_INTEGRATORS: tuple[str, ...] = ("auto", "exact", "rk4", "dop853", "splitting", "implicit")
-"""Names ``time.integrator`` accepts by default (``parse_scene(known_integrators=...)``)."""
 
 FRAMES: tuple[str, ...] = ("world", "body")
 OUTPUT_SUFFIXES: tuple[str, ...] = (".csv", ".npz")
@@ -328,12 +326,13 @@ _TOP_KEYS = ("body", "initial", "forces", "time", "output")
 
 
 def parse_scene(text: str, *, source: str, base_dir: Path,
-                known_integrators: Sequence[str] = KNOWN_INTEGRATORS) -> Scene:
+                known_integrators: Sequence[str] | None = None) -> Scene:
     """Parse and validate a whole scene.
 
     text : the YAML document. source : the name used in messages (usually the file's path).
     base_dir : folder that relative ``body.mesh`` and ``output.file`` paths start from.
-    known_integrators : names ``time.integrator`` may take.
+    known_integrators : names ``time.integrator`` may take; default: the integrator registry's
+        (``integrator_names()``), so the scene and the registry cannot disagree.
     Raises SceneError (one line: ``source:line: key.path: problem``) for any invalid input; errors
     of the mesh modules (InputError subclasses) keep their class, with the same prefix.
     """
@@ -350,6 +349,10 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
     body = _body_spec(fields["body"], base_dir)
     initial = _initial(fields.get("initial"))
     forces = _forces(fields.get("forces"))
+    if known_integrators is None:
+        from massprops.dynamics.integrators import integrator_names
+
+        known_integrators = integrator_names()
     time = _time(fields["time"], known_integrators)
     output = _output(fields.get("output"), base_dir)
     if isinstance(body, _MeshBodySpec):
@@ -362,7 +365,7 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
 
 
 def load_scene(path: str | os.PathLike[str], *,
-               known_integrators: Sequence[str] = KNOWN_INTEGRATORS) -> Scene:
+               known_integrators: Sequence[str] | None = None) -> Scene:
     """Read and validate the scene file at ``path`` (UTF-8 YAML); see ``parse_scene``."""
     path = Path(path)
     source = os.fspath(path)

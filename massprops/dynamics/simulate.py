@@ -176,6 +176,10 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     else:
         reason = "chosen by the user"
     spec = INTEGRATORS[name]
+    if spec.kind == "exact" and (program.has_torque or not program.translation_closed_form):
+        raise UsageError(f"{scene.source}: integrator exact solves only torque-free scenes with "
+                         "constant forces (gravity, world-frame forces at the centre of mass); "
+                         "use auto, dop853 or a splitting method")
     duration = scene.time.duration
     t_out = sample_times(duration, every if every is not None else scene.output.every)
     setting = _setting(spec, scene, program, rtol, step)
@@ -208,11 +212,20 @@ def _setting(spec, scene: Scene, program: ForceProgram, rtol: float | None,
         return float(rtol if rtol is not None else scene.time.rtol)
     if spec.kind == "fixed":
         h = step if step is not None else scene.time.step
-        if h is None:  # resolve the fastest rate with margin, at most 1e5 steps per run
-            fastest = max(program.stiffest_rate, 1e-300)
-            h = min(0.1 / fastest, scene.time.duration / 1e3)
+        if h is None:
+            h = default_step(scene, program, stiff=spec.stiff)
         return float(h)
     return 0.0
+
+
+def default_step(scene: Scene, program: ForceProgram, *, stiff: bool) -> float:
+    """A fixed step when the scene gives none: 1/1000 of the run, and small against the spin rate
+    (0.05 rad per step) and, for explicit methods, against the stiffest rate (0.1 per step). A
+    stiff method steps over the stiff rate: that is its point."""
+    ini = scene.initial
+    spin = float(np.linalg.norm(ini.angular_velocity))
+    rate = max(spin / 0.5, 0.0 if stiff else program.stiffest_rate)
+    return min(scene.time.duration / 1e3, 0.1 / rate) if rate > 0 else scene.time.duration / 1e3
 
 
 def _check_energy(scene, program, traj, setting, name, result) -> None:
@@ -341,6 +354,8 @@ class _Runner:
     def _chunks(self, t0: float, t1: float) -> list[tuple[float, float]]:
         """[t0, t1] cut at the run's fixed grid k·duration/CHUNKS (deterministic: results never
         depend on timing); fixed-step methods cut only on their own step grid."""
+        if self.spec.kind == "exact":  # no steps: one evaluation per sample, cost independent of t
+            return [(t0, t1)]
         grid = self.duration * np.arange(1, CHUNKS) / CHUNKS
         cuts = grid[(grid > t0) & (grid < t1)]
         if self.spec.kind == "fixed":

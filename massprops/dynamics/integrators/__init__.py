@@ -49,22 +49,31 @@ fixed, order 5, L-stable: damps a stiff mode out), ``midpoint`` (implicit midpoi
 order 2, symplectic: keeps a stiff linear mode's energy, aliases its phase). ``spec.stiff``
 marks the ones stable far beyond the explicit step limit.
 
-Caching: numba's on-disk cache (``__pycache__/*.nbi, *.nbc``) is keyed on the source file of
-each kernel only. After editing a file a kernel calls into (``forces.py``, ``_shared.py``,
-``_newton.py``, ``_dop853_tableau.py``) delete those cache files, or the kernels keep the old
-code. A fresh clone has no cache; the first run compiles the four kernels (~20 s CPU), later
-runs load them in well under a second.
+``exact`` (kind "exact") is the closed-form torque-free body: it takes no step and its cost does
+not depend on t; simulate offers it only for torque-free scenes with constant forces.
+
+Caching: numba's on-disk cache is keyed on each kernel's own source file only; importing
+``massprops.dynamics`` therefore points it at a folder named by a hash of all the dynamics
+sources, so an edit or upgrade of a file a kernel calls into recompiles instead of running stale
+code. A fresh machine compiles the kernels once (~20 s CPU); later runs load them in well under
+a second.
 """
 
 from __future__ import annotations
 
-from massprops.dynamics.integrators import dop853, midpoint, radau, rk4
+from massprops.dynamics.integrators import closed_form, dop853, midpoint, radau, rk4
 from massprops.dynamics.integrators.base import IntegratorSpec
 
-_BUILT_IN: tuple[IntegratorSpec, ...] = (rk4.SPEC, dop853.SPEC, radau.SPEC, midpoint.SPEC)
+_BUILT_IN: tuple[IntegratorSpec, ...] = (closed_form.SPEC, rk4.SPEC, dop853.SPEC, radau.SPEC,
+                                         midpoint.SPEC)
 
 INTEGRATORS: dict[str, IntegratorSpec] = {spec.name: spec for spec in _BUILT_IN}
 """name -> IntegratorSpec; the CLI's choices and the scene's ``time.integrator`` come from here."""
+
+
+def integrator_names() -> tuple[str, ...]:
+    """What ``time.integrator`` and ``--integrator`` accept: "auto" and every registered name."""
+    return ("auto", *sorted(INTEGRATORS))
 
 
 def register(spec: IntegratorSpec) -> None:
@@ -74,4 +83,4 @@ def register(spec: IntegratorSpec) -> None:
     INTEGRATORS[spec.name] = spec
 
 
-__all__ = ["INTEGRATORS", "IntegratorSpec", "register"]
+__all__ = ["INTEGRATORS", "IntegratorSpec", "integrator_names", "register"]

@@ -21,7 +21,7 @@ STATUS_OK, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW = 0, 1, 2
 """``stats[STATUS]``: 0 fine; 1 a NaN/inf appeared (the state is the last finite one); 2 the step
 fell below round-off (1e-14 of the time scale): the problem is stiff or singular there."""
 
-KINDS = ("fixed", "adaptive")
+KINDS = ("fixed", "adaptive", "exact")
 
 RunSegment = Callable[..., tuple[float, float]]
 """run_segment(y, t0, t1, setting, program_arrays, rot_only, t_out, y_out, stats) -> (err, t)."""
@@ -32,7 +32,8 @@ class IntegratorSpec:
     """One entry of the `INTEGRATORS` registry.
 
     name : registry key, what ``time.integrator`` and ``--integrator`` accept.
-    kind : "fixed" (``setting`` is the step h, s) or "adaptive" (``setting`` is rtol).
+    kind : "fixed" (``setting`` is the step h, s), "adaptive" (``setting`` is rtol) or "exact"
+        (closed form, no steps, ``setting`` ignored).
     order : classical order of the step-point values.
     description : one line, shown in ``--help``.
     run_segment : the checked entry point (`segment_runner`), see the package docstring.
