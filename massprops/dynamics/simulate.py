@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from massprops.dynamics.accuracy import Scales, companion, exact_roundoff, state_error
 from massprops.dynamics.forces import (
     DRAG,
     FORCE_BODY,
@@ -183,27 +184,70 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     duration = scene.time.duration
     t_out = sample_times(duration, every if every is not None else scene.output.every)
     setting = _setting(spec, scene, program, rtol, step)
-    y0 = initial_principal_state(scene)
-    runner = _Runner(spec, program, setting, progress, duration)
-    y_out, t_reached, interrupted = runner.run(y0, t_out)
+    main_progress = None if progress is None else (lambda f: progress(0.5 * f))
+    run = run_once(scene, program, spec, setting, t_out, main_progress)
+    conservative = is_conservative(program)
+    traj = to_world(scene, run.t, run.y, program, with_energy=conservative
+                    or cannot_gain_energy(program))
+    diagnostics = _diagnostics(program, run.y, traj, conservative)
+    result = SimulationResult(
+        integrator=name, reason=reason, steps=int(run.stats[0]),
+        evaluations=int(run.stats[1]), rejected=int(run.stats[2]),
+        wall_time_s=run.wall, warmup_time_s=run.warmup, trajectory=traj,
+        diagnostics=diagnostics, interrupted=run.interrupted)
+    if run.failure is not None:
+        raise DivergenceError(f"{scene.source}: {run.failure}", partial=result)
+    if traj.energy is not None:  # only scenes that cannot gain energy carry it
+        _check_energy(scene, program, traj, setting, name, result)
+    if not run.interrupted:
+        late = None if progress is None else (lambda f: progress(0.5 + 0.5 * f))
+        diagnostics["error_estimate"] = _error_estimate(scene, program, spec, setting, t_out,
+                                                        traj, late)
+    return result
+
+
+@dataclass(frozen=True, eq=False)
+class RawRun:
+    """One integration in the principal frame: samples t (n,), y (n, 13) up to where it got,
+    stats [steps, nfev, rejected, njev, status], wall and warm-up seconds, failure message."""
+
+    t: np.ndarray
+    y: np.ndarray
+    stats: np.ndarray
+    wall: float
+    warmup: float
+    failure: str | None
+    interrupted: bool
+
+
+def run_once(scene: Scene, program: ForceProgram, spec, setting: float, t_out: np.ndarray,
+             progress: Callable[[float], None] | None = None) -> RawRun:
+    """Integrate ``scene`` once with ``spec`` at ``setting``, sampled at ``t_out``."""
+    runner = _Runner(spec, program, setting, progress, scene.time.duration)
+    y_out, t_reached, interrupted = runner.run(initial_principal_state(scene), t_out)
     keep = t_out <= t_reached
     t_kept, y_kept = t_out[keep], y_out[keep]
     if t_kept[-1] < t_reached:  # interrupted or failed between samples: keep the last state
         t_kept, y_kept = np.append(t_kept, t_reached), np.vstack([y_kept, runner.y_last])
-    conservative = is_conservative(program)
-    traj = to_world(scene, t_kept, y_kept, program, with_energy=conservative
-                    or cannot_gain_energy(program))
-    diagnostics = _diagnostics(program, y_kept, traj, conservative, runner.err)
-    result = SimulationResult(
-        integrator=name, reason=reason, steps=int(runner.stats[0]),
-        evaluations=int(runner.stats[1]), rejected=int(runner.stats[2]),
-        wall_time_s=runner.wall, warmup_time_s=runner.warmup, trajectory=traj,
-        diagnostics=diagnostics, interrupted=interrupted)
-    if runner.failure is not None:
-        raise DivergenceError(f"{scene.source}: {runner.failure}", partial=result)
-    if traj.energy is not None:  # only scenes that cannot gain energy carry it
-        _check_energy(scene, program, traj, setting, name, result)
-    return result
+    return RawRun(t_kept, y_kept, runner.stats, runner.wall, runner.warmup, runner.failure,
+                  interrupted)
+
+
+def _error_estimate(scene, program, spec, setting, t_out, traj, progress) -> float | None:
+    """Global error estimate in the contract's metric (see massprops.dynamics.accuracy); None
+    when it cannot be had (interrupted, or the companion run diverged)."""
+    scales = Scales.of(scene.body.size, traj, scene.time.duration)
+    plan = companion(spec.kind, spec.order, setting)
+    if plan is None:
+        return exact_roundoff(traj, scales)
+    other_setting, factor = plan
+    other = run_once(scene, program, spec, other_setting, t_out, progress)
+    if other.interrupted:
+        return None
+    if other.failure is not None:  # the 2h companion diverged: h is near the stability limit and
+        return None  # the error cannot be estimated this way: reported as unknown (null)
+    other_traj = to_world(scene, other.t, other.y, program, with_energy=False)
+    return state_error(traj, other_traj, scales) * factor
 
 
 def _setting(spec, scene: Scene, program: ForceProgram, rtol: float | None,
@@ -250,11 +294,11 @@ def _stability_hint(program: ForceProgram, setting: float, name: str) -> str:
     return "try a smaller step or tolerance"
 
 
-def _diagnostics(program: ForceProgram, y: np.ndarray, traj: Trajectory, conservative: bool,
-                 err: float) -> dict:
+def _diagnostics(program: ForceProgram, y: np.ndarray, traj: Trajectory, conservative: bool
+                 ) -> dict:
     qn = np.abs(np.linalg.norm(y[:, 6:10], axis=1) - 1.0)
     out = {"energy_rel_drift": None, "angular_momentum_rel_drift": None,
-           "quaternion_norm_error": float(qn.max()), "error_estimate": float(err)}
+           "quaternion_norm_error": float(qn.max()), "error_estimate": None}
     if conservative and traj.energy is not None:
         e = traj.energy
         kinetic = 0.5 * program.mass * np.sum(y[0, 3:6] ** 2) + 0.5 * np.sum(
@@ -276,7 +320,7 @@ class _Runner:
         self.spec, self.program, self.setting = spec, program, setting
         self.progress, self.duration = progress, duration
         self.stats = np.zeros(5, dtype=np.int64)
-        self.err, self.wall, self.warmup = 0.0, 0.0, 0.0
+        self.wall, self.warmup = 0.0, 0.0
         self.failure: str | None = None
         self.y_last = None
 
@@ -325,9 +369,8 @@ class _Runner:
                 sel[(t_out[sel] > t) & (t_out[sel] <= t_end)]
             y = y_full[6:].copy() if rot_only else y_full.copy()
             ys = np.empty((idx.size, y.size))
-            err, t_reached = self.spec.run_segment(y, t, t_end, self.setting, arrays, rot_only,
+            _, t_reached = self.spec.run_segment(y, t, t_end, self.setting, arrays, rot_only,
                                                    t_out[idx], ys, self.stats)
-            self.err += err
             if rot_only:
                 r0, v0 = y_full[0:3].copy(), y_full[3:6].copy()
                 tau = t_out[idx] - t
