@@ -38,9 +38,13 @@ resolve the stiffest rate over the run (RK-type stability limit ~2.8 / rate)."""
 ENERGY_BLOWUP = 1e6
 """A conservative or dissipative scene whose energy grows by this factor of its scale diverged."""
 
-CHUNKS = 32
-"""The run is cut into this many compiled calls (at fixed times, so results never depend on
-timing); between calls Ctrl-C and the progress bar are served."""
+CHUNK_STEPS = 50_000
+"""Steps per compiled call (~0.05 s): between calls Ctrl-C and the progress bar are served.
+Chunks are sized by step counts, never by timers, so results do not depend on the machine."""
+
+FIRST_CHUNK = 1 / 32
+"""An adaptive run's first call covers this fraction of the run; later ones grow or shrink
+(at most ×16, at least ×½) toward CHUNK_STEPS steps, from the steps the previous call took."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -364,11 +368,15 @@ class _Runner:
                              (t_out > t0) & (t_out <= t1))
         accel = p.constant_force(active) / p.mass if rot_only else None
         arrays = (active, p.codes, p.params, p.mass, p.inertia)
-        for t, t_end in self._chunks(t0, t1):
+        t = t0
+        length = self._first_chunk(t0, t1)
+        while t < t1:
+            t_end = self._chunk_end(t, t0, t1, length)
             idx = sel[(t_out[sel] >= t) & (t_out[sel] <= t_end)] if t == t0 else \
                 sel[(t_out[sel] > t) & (t_out[sel] <= t_end)]
             y = y_full[6:].copy() if rot_only else y_full.copy()
             ys = np.empty((idx.size, y.size))
+            steps_before = int(self.stats[0])
             _, t_reached = self.spec.run_segment(y, t, t_end, self.setting, arrays, rot_only,
                                                    t_out[idx], ys, self.stats)
             if rot_only:
@@ -392,27 +400,23 @@ class _Runner:
                 return t_reached
             if self.progress is not None:
                 self.progress(t_end / self.duration)
+            taken = max(int(self.stats[0]) - steps_before, 1)
+            length = (t_end - t) * min(16.0, max(0.5, CHUNK_STEPS / taken))
+            t = t_end
         return t1
 
-    def _chunks(self, t0: float, t1: float) -> list[tuple[float, float]]:
-        """[t0, t1] cut at the run's fixed grid k·duration/CHUNKS (deterministic: results never
-        depend on timing); fixed-step methods cut only on their own step grid."""
+    def _first_chunk(self, t0: float, t1: float) -> float:
         if self.spec.kind == "exact":  # no steps: one evaluation per sample, cost independent of t
-            return [(t0, t1)]
-        grid = self.duration * np.arange(1, CHUNKS) / CHUNKS
-        cuts = grid[(grid > t0) & (grid < t1)]
+            return t1 - t0
         if self.spec.kind == "fixed":
-            n = max(1, math.ceil((t1 - t0) / self.setting * (1 - 1e-12)))
-            h = (t1 - t0) / n
-            ks = np.unique(np.clip(np.round((cuts - t0) / h), 1, n - 1).astype(int)) if n > 1 \
-                else np.empty(0, int)
-            cuts = t0 + ks * h
-        bounds = [t0, *cuts.tolist(), t1]
-        return list(zip(bounds[:-1], bounds[1:]))
+            return CHUNK_STEPS * self.setting
+        return FIRST_CHUNK * self.duration
 
-    def _failure_message(self, t_reached: float) -> str:
-        status = int(self.stats[4])
-        what = "the state became NaN or infinite" if status == 1 else \
-            "the step size fell below round-off (the problem is stiff or singular there)"
-        return (f"{self.spec.name} diverged at t = {t_reached:.6g} s: {what}; "
-                + _stability_hint(self.program, self.setting, self.spec.name))
+    def _chunk_end(self, t: float, t0: float, t1: float, length: float) -> float:
+        """End of the next call: t + length, on the segment's step grid for fixed steps."""
+        if self.spec.kind != "fixed":
+            return t1 if t + length >= t1 * (1 - 1e-12) else t + length
+        n = max(1, math.ceil((t1 - t0) / self.setting * (1 - 1e-12)))
+        h = (t1 - t0) / n
+        k = round((t - t0) / h) + max(1, round(length / h))
+        return t1 if k >= n else t0 + k * h

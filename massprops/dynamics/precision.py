@@ -1,0 +1,168 @@
+"""Error against run time: every applicable integrator over a ladder of settings, measured against
+the exact solution where the scene has one, else against a reference run converged far beyond
+the tightest setting (and checked).
+
+Each run reports its wall time (best of repeats for short runs: timers on a shared machine only
+ever add), steps, evaluations, its error in the contract's metric (massprops.dynamics.accuracy),
+and its own `error_estimate`, so the estimate's honesty can be read off next to the truth.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from massprops.dynamics.accuracy import Scales, exact_roundoff, state_error
+from massprops.dynamics.forces import ForceProgram, compile_forces
+from massprops.dynamics.model import Scene
+from massprops.dynamics.simulate import (choose_integrator, default_step, run_once, simulate,
+                                         to_world)
+from massprops.errors import ComputationError, DivergenceError, UsageError
+
+RTOL_LADDER = tuple(10.0**-k for k in range(3, 13))
+"""Adaptive settings, loose to tight; the reference runs at 1e-13 (see `reference_run`)."""
+
+STEP_HALVINGS = 10
+"""Fixed-step ladder: h0, h0/2, ..., h0/2^9 with h0 = 16 × the scene's default step."""
+
+MAX_STEPS = 2_000_000
+"""Fixed-step settings that would take more steps than this are left out of the ladder."""
+
+SAMPLES = 10
+"""Errors are the worst over this many equally spaced times (and the end), not the end alone."""
+
+MIN_TIMED_S = 0.2
+"""Short runs are repeated (up to 5 times) until they have used this much time; best is kept."""
+
+
+@dataclass(frozen=True)
+class PrecisionRun:
+    """One rung of a ladder. error and estimate are in the contract's metric; None = diverged
+    (error) or unavailable (estimate)."""
+
+    integrator: str
+    setting: float
+    setting_name: str
+    wall_time_s: float
+    error: float | None
+    estimate: float | None
+    steps: int
+    evaluations: int
+
+    def as_dict(self) -> dict:
+        return {"integrator": self.integrator, "setting": self.setting,
+                "setting_name": self.setting_name, "wall_time_s": self.wall_time_s,
+                "error": self.error, "error_estimate": self.estimate, "steps": self.steps,
+                "evaluations": self.evaluations}
+
+
+@dataclass(frozen=True)
+class PrecisionReport:
+    """reference: how the truth was obtained (kind "exact" or "run", method, setting, its own
+    accuracy and how that was checked); runs: every rung of every ladder."""
+
+    reference: dict
+    runs: tuple[PrecisionRun, ...]
+
+    def as_dict(self) -> dict:
+        return {"reference": self.reference, "runs": [r.as_dict() for r in self.runs]}
+
+
+def applicable(scene: Scene, program: ForceProgram, registry: dict) -> list[str]:
+    """Integrators that can run this scene (exact only for torque-free, constant-force scenes)."""
+    closed = not program.has_torque and program.translation_closed_form
+    return [name for name, spec in registry.items() if spec.kind != "exact" or closed]
+
+
+def ladder(spec, scene: Scene, program: ForceProgram) -> list[float]:
+    """Settings from coarse to fine for one integrator."""
+    if spec.kind == "adaptive":
+        return list(RTOL_LADDER)
+    if spec.kind == "exact":
+        return [0.0]
+    h0 = 16.0 * default_step(scene, program, stiff=spec.stiff)
+    steps = [h0 / 2**k for k in range(STEP_HALVINGS)]
+    return [h for h in steps if scene.time.duration / h <= MAX_STEPS]
+
+
+def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
+              progress: Callable[[float], None] | None = None) -> PrecisionReport:
+    """Run the ladders of ``integrators`` (default: every applicable one) on ``scene``."""
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    program = compile_forces(scene)
+    names = applicable(scene, program, INTEGRATORS)
+    if integrators:
+        unknown = sorted(set(integrators) - set(names))
+        if unknown:
+            raise UsageError(f"{scene.source}: integrator(s) {', '.join(unknown)} do not apply "
+                             f"to this scene; applicable: {', '.join(names)}")
+        names = [n for n in names if n in integrators]
+    t_out = np.linspace(0.0, scene.time.duration, SAMPLES + 1)
+    truth, reference = reference_run(scene, program, INTEGRATORS, t_out)
+    scales = Scales.of(scene.body.size, truth, scene.time.duration)
+    plan = [(n, s) for n in names for s in ladder(INTEGRATORS[n], scene, program)]
+    runs = []
+    for i, (name, setting) in enumerate(plan):
+        runs.append(_rung(scene, program, INTEGRATORS[name], setting, t_out, truth, scales))
+        if progress is not None:
+            progress((i + 1) / len(plan))
+    return PrecisionReport(reference, tuple(runs))
+
+
+def reference_run(scene: Scene, program: ForceProgram, registry: dict, t_out: np.ndarray):
+    """(trajectory, description) of the truth the ladders are measured against.
+
+    exact where it applies; else dop853 at rtol 1e-13 checked against rtol 1e-12 (their distance
+    bounds the tighter one's error by tolerance proportionality: ~1/9 of it), or, for stiff
+    scenes, the implicit method at a step 4× finer than its finest rung checked against twice
+    that step by Richardson's rule.
+    """
+    if "exact" in applicable(scene, program, registry):
+        truth = _trajectory(scene, program, registry["exact"], 0.0, t_out)
+        scales = Scales.of(scene.body.size, truth, scene.time.duration)
+        return truth, {"kind": "exact", "integrator": "exact", "setting": None,
+                       "accuracy": exact_roundoff(truth, scales),
+                       "checked": "closed form; accuracy is its round-off bound"}
+    stiff = choose_integrator(scene, program, registry)[0] == "implicit"
+    if stiff:
+        spec = registry["implicit"]
+        fine = ladder(spec, scene, program)[-1] / 4
+        settings, factor = (fine, 2 * fine), 1 / (2**spec.order - 1)
+        how = f"implicit at step {fine:.3g} s against step {2 * fine:.3g} s (Richardson)"
+    else:
+        spec = registry["dop853"]
+        settings, factor = (1e-13, 1e-12), 1 / 9
+        how = "dop853 at rtol 1e-13 against rtol 1e-12 (tolerance proportionality)"
+    truth = _trajectory(scene, program, spec, settings[0], t_out)
+    check = _trajectory(scene, program, spec, settings[1], t_out)
+    scales = Scales.of(scene.body.size, truth, scene.time.duration)
+    accuracy = state_error(truth, check, scales) * factor
+    return truth, {"kind": "run", "integrator": spec.name, "setting": settings[0],
+                   "accuracy": accuracy, "checked": how}
+
+
+def _trajectory(scene, program, spec, setting, t_out):
+    run = run_once(scene, program, spec, setting, t_out)
+    if run.failure is not None:
+        raise ComputationError(f"{scene.source}: the reference run failed: {run.failure}")
+    return to_world(scene, run.t, run.y, program, with_energy=False)
+
+
+def _rung(scene, program, spec, setting, t_out, truth, scales) -> PrecisionRun:
+    every = scene.time.duration / SAMPLES
+    name = {"adaptive": "rtol", "fixed": "step_s"}.get(spec.kind, "none")
+    try:
+        result = simulate(scene, integrator=spec.name, rtol=setting, step=setting, every=every)
+    except DivergenceError:
+        return PrecisionRun(spec.name, setting, name, math.nan, None, None, 0, 0)
+    error = state_error(result.trajectory, truth, scales)
+    wall, spent, tries = result.wall_time_s, result.wall_time_s, 1
+    while spent < MIN_TIMED_S and tries < 5:  # best of repeats: only the main run is timed
+        again = run_once(scene, program, spec, setting, t_out)
+        wall, spent, tries = min(wall, again.wall), spent + again.wall, tries + 1
+    return PrecisionRun(spec.name, setting, name, wall, error if math.isfinite(error) else None,
+                        result.diagnostics["error_estimate"], result.steps, result.evaluations)
