@@ -245,6 +245,10 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         from massprops.dynamics.simulate import simulate as run_scene
         from massprops.errors import DivergenceError
 
+        if plot_path:
+            from massprops.dynamics.plots import require_matplotlib
+
+            require_matplotlib()
         scene = load_scene(scene_path)
         for w in scene.warnings:
             _say_warning(scene.body_source, w)
@@ -278,6 +282,53 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         click.echo("massprops: interrupted; wrote what was computed", err=True)
         code = 130
     ctx.exit(code)
+
+
+@cli.command()
+@click.argument("scene_path", metavar="SCENE")
+@click.option("--json", "as_json", is_flag=True,
+              help="One JSON object: the reference and every run.")
+@click.option("--plot", "plot_path", default=None,
+              help="Work-precision diagram (PNG): error against run time per integrator.")
+@click.option("--integrator", "integrators", multiple=True,
+              type=RegistryChoice(_integrator_names),
+              help="Only these integrators (repeatable); default: every applicable one.")
+@click.option("--force", is_flag=True, help="Replace an existing plot file.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+@click.pass_context
+def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str | None,
+              integrators: tuple[str, ...], force: bool, quiet: bool) -> None:
+    """Error against run time: each applicable integrator over a ladder of tolerances or steps,
+    measured against the exact solution or a much tighter, checked reference run."""
+
+    def run() -> None:
+        from massprops.dynamics.precision import precision as run_ladders
+        from massprops.dynamics.scene import load_scene
+
+        if plot_path:
+            from massprops.dynamics.plots import require_matplotlib
+
+            require_matplotlib()
+        scene = load_scene(scene_path)
+        progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+        try:
+            report = run_ladders(scene, integrators=[i for i in integrators if i != "auto"],
+                                 progress=progress)
+        finally:
+            progress.close()
+        if plot_path:
+            from massprops.dynamics.plots import plot_precision
+
+            plot_precision(report, plot_path, title=scene_path, force=force,
+                           protect=[scene_path, *scene.input_files])
+        if as_json:
+            _emit_json(report.as_dict())
+        else:
+            from massprops.report import print_precision
+
+            print_precision(scene_path, report)
+
+    ctx.exit(_guarded(ctx, run))
 
 
 def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,

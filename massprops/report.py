@@ -8,13 +8,16 @@ residue below its bound prints as 0. --json output is never rounded.
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
 
-_console = Console(highlight=False)
+# a pipe gets no colour (rich's own check) and a fixed width wide enough for the tables, rather
+# than wrapping at 80 columns where no one will resize a window
+_console = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
 
 
 def fmt(value: float, error: float = 0.0) -> str:
@@ -124,3 +127,26 @@ def print_simulation(scene, result) -> None:
     if result.interrupted:
         head.add_row("interrupted", "yes: the results stop at the time above")
     _console.print(head)
+
+
+def print_precision(name: str, report) -> None:
+    """The ladders as one table per integrator block: setting, time, error, estimate, steps."""
+    ref = report.reference
+    t = Table(title=Text(f"{name}: error against run time", style="bold"), title_justify="left",
+              box=None, padding=(0, 2), header_style="bold")
+    for col in ("integrator", "rtol | h [s]", "time [s]", "error", "estimate", "steps",
+                "evals"):
+        t.add_column(col, justify="left" if col == "integrator" else "right", no_wrap=True)
+    previous = None
+    for r in report.runs:
+        label = r.integrator if r.integrator != previous else ""
+        previous = r.integrator
+        setting = f"{r.setting:.3g}" if r.setting_name != "none" else ""
+        t.add_row(label, setting, "—" if r.error is None else f"{r.wall_time_s:.2e}",
+                  "diverged" if r.error is None else f"{r.error:.2e}",
+                  "—" if r.estimate is None else f"{r.estimate:.2e}", str(r.steps),
+                  str(r.evaluations))
+    _console.print(t)
+    acc = ref.get("accuracy")
+    _console.print(f"reference: {ref['kind']} ({ref['checked']}); its accuracy ~ "
+                   f"{acc:.1e}" if acc is not None else f"reference: {ref['kind']}")

@@ -9,6 +9,11 @@ import numpy as np
 from massprops.errors import UsageError
 
 
+def require_matplotlib() -> None:
+    """Fail at once (UsageError) when --plot cannot be served, before any long computation."""
+    _pyplot()
+
+
 def _pyplot():
     try:
         import matplotlib
@@ -65,3 +70,34 @@ def _drift(ax, t, delta, scale, label) -> None:
     floor = np.finfo(float).eps / 4  # plot exact zeros at a visible floor on the log axis
     ax.semilogy(t, np.maximum(rel, floor))
     ax.grid(True, which="both", alpha=0.3)
+
+
+def plot_precision(report, path: str | Path, *, title: str = "", force: bool = False,
+                   protect=()) -> None:
+    """Work-precision diagram: error (contract metric) against wall time, log-log, one line per
+    integrator, the reference's own accuracy as a floor."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(8, 5.5), constrained_layout=True)
+    names = sorted({r.integrator for r in report.runs})
+    markers = "osD^vP*Xh<>"
+    floor = report.reference.get("accuracy") or 0.0
+    for i, name in enumerate(names):
+        rows = [r for r in report.runs if r.integrator == name and r.error is not None]
+        if not rows:
+            continue
+        ax.loglog([r.wall_time_s for r in rows], [max(r.error, 1e-17) for r in rows],
+                  marker=markers[i % len(markers)], label=name)
+    if floor > 0:
+        ax.axhline(floor, color="grey", linestyle=":", label="reference accuracy")
+    ax.set_xlabel("wall time per run [s]")
+    ax.set_ylabel("error (max of position/size, angle [rad], v/v_scale, ω/ω_scale)")
+    ref = report.reference
+    how = "exact solution" if ref["kind"] == "exact" else \
+        f"reference: {ref['integrator']} {ref['setting']:.3g}"
+    ax.set_title(f"{title}  ({how})" if title else how)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    try:
+        save_figure(fig, path, force=force, protect=protect)
+    finally:
+        plt.close(fig)
