@@ -20,6 +20,11 @@ from rich.text import Text
 _console = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
 
 
+def _row(table: Table, *cells) -> None:
+    """Add a row of plain text: units like "[m³]" must not be read as rich markup tags."""
+    table.add_row(*(Text(c) if isinstance(c, str) else c for c in cells))
+
+
 def fmt(value: float, error: float = 0.0) -> str:
     """``value`` with the significant digits that ``error`` (an absolute bound) leaves certain."""
     if not math.isfinite(value):
@@ -32,12 +37,13 @@ def fmt(value: float, error: float = 0.0) -> str:
     return f"{value:.{digits}g}"
 
 
-def _matrix(m: np.ndarray, err: np.ndarray | float, title: str) -> Table:
+def _matrix(m: np.ndarray, err: np.ndarray | float, title: str) -> Group:
+    """A heading line, then the matrix (a table is too narrow to carry a long title)."""
     err = np.broadcast_to(np.asarray(err, dtype=float), m.shape)
-    t = Table(title=title, show_header=False, box=None, padding=(0, 2), title_justify="left")
+    t = Table(show_header=False, box=None, padding=(0, 2))
     for i in range(m.shape[0]):
-        t.add_row(*(fmt(float(m[i, j]), float(err[i, j])) for j in range(m.shape[1])))
-    return t
+        _row(t, *(fmt(float(m[i, j]), float(err[i, j])) for j in range(m.shape[1])))
+    return Group(Text(title, style="bold"), t)
 
 
 def _vector(v: np.ndarray, err: np.ndarray | float) -> str:
@@ -63,12 +69,12 @@ def inspection_renderable(result) -> Group:
     head.add_column("quantity")
     head.add_column("value")
     head.add_column("error bar" + (" (round-off + float32 input)" if inp is not None else ""))
-    head.add_row("volume [m³]", fmt(p.volume, float(bound("volume"))), _bar(bound("volume")))
-    head.add_row("mass [kg]", fmt(p.mass, float(bound("mass"))), _bar(bound("mass")))
-    head.add_row("density [kg/m³]", fmt(p.density), "")
-    head.add_row("centre of mass [m]", _vector(p.center_of_mass, bound("center_of_mass")),
+    _row(head, "volume [m³]", fmt(p.volume, float(bound("volume"))), _bar(bound("volume")))
+    _row(head, "mass [kg]", fmt(p.mass, float(bound("mass"))), _bar(bound("mass")))
+    _row(head, "density [kg/m³]", fmt(p.density), "")
+    _row(head, "centre of mass [m]", _vector(p.center_of_mass, bound("center_of_mass")),
                  _bar(bound("center_of_mass")))
-    head.add_row("principal moments [kg·m²]",
+    _row(head, "principal moments [kg·m²]",
                  _vector(p.principal_moments, bound("principal_moments")),
                  _bar(bound("principal_moments")))
 
@@ -81,7 +87,7 @@ def inspection_renderable(result) -> Group:
     for key, value in h.as_dict().items():
         if isinstance(value, (list, tuple)):
             value = ", ".join(fmt(float(v)) if isinstance(v, float) else str(v) for v in value)
-        mesh.add_row(key, str(value))
+        _row(mesh, key, str(value))
 
     parts = [head, Text(""), j, Text(""), axes, Text(""), mesh]
     if result.warnings:
@@ -98,9 +104,9 @@ def print_alignment(input_path: str, output_path: str, alignment) -> None:
     """Summary of `massprops align`: the map written and the moments that are now diagonal."""
     t = Table(show_header=False, box=None, padding=(0, 2),
               title=Text(f"{input_path} → {output_path}", style="bold"), title_justify="left")
-    t.add_row("map", "v ↦ rotation · v + translation")
-    t.add_row("translation [m]", _vector(alignment.translation, 0.0))
-    t.add_row("principal moments [kg·m²]", _vector(alignment.principal_moments, 0.0))
+    _row(t, "map", "v ↦ rotation · v + translation")
+    _row(t, "translation [m]", _vector(alignment.translation, 0.0))
+    _row(t, "principal moments [kg·m²]", _vector(alignment.principal_moments, 0.0))
     _console.print(t)
     _console.print(_matrix(alignment.rotation, 0.0, "rotation (rows: principal axes)"))
 
@@ -109,23 +115,23 @@ def print_simulation(scene, result) -> None:
     """Summary of `massprops simulate`: method and why, cost, final state, diagnostics."""
     head = Table(show_header=False, box=None, padding=(0, 2), title_justify="left",
                  title=Text(scene.source, style="bold"))
-    head.add_row("integrator", f"{result.integrator} ({result.reason})")
-    head.add_row("steps / evaluations", f"{result.steps} / {result.evaluations}"
+    _row(head, "integrator", f"{result.integrator} ({result.reason})")
+    _row(head, "steps / evaluations", f"{result.steps} / {result.evaluations}"
                  + (f" ({result.rejected} rejected)" if result.rejected else ""))
-    head.add_row("wall time [s]", f"{result.wall_time_s:.3g} (+ {result.warmup_time_s:.3g} "
+    _row(head, "wall time [s]", f"{result.wall_time_s:.3g} (+ {result.warmup_time_s:.3g} "
                  "compile/load)")
     final = result.trajectory.row(-1)
-    head.add_row("t [s]", fmt(final["t"]))
+    _row(head, "t [s]", fmt(final["t"]))
     for key, unit in (("position", "m"), ("orientation", "w, x, y, z"),
                       ("velocity", "m/s"), ("angular_velocity", "rad/s, world"),
                       ("angular_velocity_body", "rad/s, body")):
-        head.add_row(f"{key.replace('_', ' ')} [{unit}]",
+        _row(head, f"{key.replace('_', ' ')} [{unit}]",
                      "(" + ", ".join(f"{x:.10g}" for x in final[key]) + ")")
     for key, value in result.diagnostics.items():
-        head.add_row(key.replace("_", " "), "n/a (not conserved here)" if value is None
+        _row(head, key.replace("_", " "), "n/a (not conserved here)" if value is None
                      else f"{value:.3g}")
     if result.interrupted:
-        head.add_row("interrupted", "yes: the results stop at the time above")
+        _row(head, "interrupted", "yes: the results stop at the time above")
     _console.print(head)
 
 
@@ -142,7 +148,7 @@ def print_precision(name: str, report) -> None:
         label = r.integrator if r.integrator != previous else ""
         previous = r.integrator
         setting = f"{r.setting:.3g}" if r.setting_name != "none" else ""
-        t.add_row(label, setting, "—" if r.error is None else f"{r.wall_time_s:.2e}",
+        _row(t, label, setting, "—" if r.error is None else f"{r.wall_time_s:.2e}",
                   "diverged" if r.error is None else f"{r.error:.2e}",
                   "—" if r.estimate is None else f"{r.estimate:.2e}", str(r.steps),
                   str(r.evaluations))
