@@ -34,7 +34,7 @@ class IntegratorSpec:
     name : registry key, what ``time.integrator`` and ``--integrator`` accept.
     kind : "fixed" (``setting`` is the step h, s), "adaptive" (``setting`` is rtol) or "exact"
         (closed form, no steps, ``setting`` ignored).
-    order : classical order of the step-point values.
+    order : classical order of the step-point values (0 for kind "exact": no truncation).
     description : one line, shown in ``--help``.
     run_segment : the checked entry point (`segment_runner`), see the package docstring.
     stiff : stable far beyond the explicit step limit (~2.8 / ForceProgram.stiffest_rate).
@@ -73,7 +73,7 @@ def segment_runner(name: str, kind: str, kernel) -> RunSegment:
         if kind == "adaptive" and setting < 1e-15:
             raise UsageError(f"integrator {name}: rtol {setting!r} is below round-off "
                              f"(2.2e-16); set {fix} to at least 1e-15")
-        _check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats)
+        check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats)
         active, codes, params, mass, inertia = program_arrays
         return kernel(y, t0, t1, setting, active, codes, params, float(mass), inertia,
                       rot_only, t_out, y_out, stats)
@@ -84,7 +84,7 @@ def segment_runner(name: str, kind: str, kernel) -> RunSegment:
     return run_segment
 
 
-def _check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats) -> None:
+def check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats) -> None:
     """Shapes and dtypes of the contract, each failure one line naming what was expected."""
     ny = 7 if rot_only else 13
     if not (isinstance(y, np.ndarray) and y.dtype == np.float64 and y.shape == (ny,)):

@@ -11,13 +11,14 @@ from __future__ import annotations
 import numpy as np
 
 from massprops.dynamics.exact import free_rotation
-from massprops.dynamics.integrators.base import IntegratorSpec
+from massprops.dynamics.integrators.base import IntegratorSpec, check_arrays
 from massprops.errors import UsageError
 
 
 def run_segment(y, t0, t1, setting, program_arrays, rot_only, t_out, y_out, stats):
     """The contract's run_segment for the rotation-only layout; err is 0 (no truncation)."""
-    if not rot_only or y.shape != (7,):
+    check_arrays("exact", y, float(t0), float(t1), bool(rot_only), t_out, y_out, stats)
+    if not rot_only:
         raise UsageError("integrator exact: needs the rotation-only state of a torque-free "
                          f"scene with constant forces, got a state of shape {y.shape}")
     inertia = program_arrays[4]

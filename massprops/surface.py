@@ -1,0 +1,285 @@
+"""Vectorised kernels on welded triangle surfaces: edge use counts, connected components,
+consistent winding, signed volumes, winding numbers. numpy only, no loop per face.
+
+Triangles given to these kernels are (t, 3) integer arrays of welded ids (see `massprops.weld`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from massprops.errors import MeshFormatError
+from massprops.parallel import in_halves
+from massprops.weld import id_dtype
+
+_CHUNK = 1 << 16  # rows per block of chunked passes: temporaries stay in cache, not in new pages
+
+
+# --- edges ------------------------------------------------------------------------------------
+def _edge_keys(tri: np.ndarray, shift: int) -> np.ndarray:
+    """(3t,) uint64 key per directed edge a→b, triangle by triangle (edge k of triangle f at
+    3f + k): min << shift+1 | max << 1 | (a > b)."""
+    t = tri.shape[0]
+    keys = np.empty((t, 3), np.uint64)
+    s1, one = np.uint64(shift + 1), np.uint64(1)
+
+    def fill(start: int, stop: int) -> None:
+        for lo in range(start, stop, _CHUNK):
+            a = tri[lo : min(lo + _CHUNK, stop)].astype(np.uint64)
+            b = a[:, [1, 2, 0]]
+            out = np.minimum(a, b) << s1
+            out |= np.maximum(a, b) << one
+            out |= a > b
+            keys[lo : lo + a.shape[0]] = out
+
+    in_halves(fill, t, _CHUNK)
+    return keys.reshape(-1)
+
+
+def _key_shift(n_ids: int) -> int:
+    shift = max(1, (n_ids - 1).bit_length())
+    if 2 * shift + 1 > 64:
+        raise MeshFormatError(f"{n_ids} distinct vertices: more than the 2**31 massprops handles")
+    return shift
+
+
+@dataclass(frozen=True, eq=False)
+class Edges:
+    """The undirected edges of a triangle set and how often each direction is used.
+
+    u, v : (e,) int, welded ids, u < v.
+    forward, backward : (e,) int64 uses as u→v and as v→u; None when every edge is used exactly
+        once each way (a closed, consistently wound 2-manifold: the common case, kept cheap).
+    """
+
+    u: np.ndarray
+    v: np.ndarray
+    forward: np.ndarray | None = None
+    backward: np.ndarray | None = None
+
+    @cached_property
+    def uses(self) -> np.ndarray:
+        """(e,) int64 triangles using each edge."""
+        if self.forward is None:
+            return np.full(self.u.size, 2, np.int64)
+        return self.forward + self.backward
+
+    @cached_property
+    def imbalance(self) -> np.ndarray:
+        """(e,) int64 forward minus backward uses: zero on every edge of a closed surface."""
+        if self.forward is None:
+            return np.zeros(self.u.size, np.int64)
+        return self.forward - self.backward
+
+    def count(self, what: str) -> int:
+        """Edges that are "unbalanced" (imbalance != 0), "conflicting" (|imbalance| > 1: the two
+        faces disagree on winding), "open" (one use) or "nonmanifold" (more than two uses)."""
+        if self.forward is None:
+            return 0
+        imbalance, uses = self.imbalance, self.uses
+        return int(np.count_nonzero({"unbalanced": imbalance != 0,
+                                     "conflicting": np.abs(imbalance) > 1,
+                                     "open": uses == 1, "nonmanifold": uses > 2}[what]))
+
+
+def _paired(keys: np.ndarray) -> bool:
+    """Sorted keys come in pairs (2g, 2g+1), one pair per undirected edge: a closed 2-manifold."""
+    if keys.size % 2:
+        return False
+    one = np.uint64(1)
+    for lo in range(0, keys.size, 2 * _CHUNK):
+        k = keys[lo : lo + 2 * _CHUNK]
+        a, b = k[0::2], k[1::2]
+        if (np.any(a & one) or not np.array_equal(b, a | one) or np.any(a[1:] <= b[:-1])
+                or (lo and keys[lo] <= keys[lo - 1])):
+            return False
+    return True
+
+
+def edges(tri: np.ndarray, n_ids: int) -> Edges:
+    """Edges of (t, 3) triangles of welded ids below ``n_ids``, each with three distinct ids."""
+    shift = _key_shift(n_ids)
+    keys = _edge_keys(tri, shift)
+    keys.sort()
+    one, mask, s1 = np.uint64(1), np.uint64((1 << shift) - 1), np.uint64(shift + 1)
+    ids = id_dtype(n_ids)
+    if _paired(keys):
+        u, v = np.empty(keys.size // 2, ids), np.empty(keys.size // 2, ids)
+        for lo in range(0, keys.size // 2, _CHUNK):
+            k = keys[2 * lo : 2 * (lo + _CHUNK) : 2]
+            u[lo : lo + _CHUNK] = k >> s1
+            v[lo : lo + _CHUNK] = (k >> one) & mask
+        return Edges(u, v)
+    und = keys >> one
+    first = np.flatnonzero(np.concatenate(([True], und[1:] != und[:-1]))) if und.size else und
+    uses = np.diff(np.append(first, und.size))
+    backward = np.add.reduceat((keys & one).astype(np.int64), first) if first.size else uses
+    und = und[first]
+    return Edges((und >> np.uint64(shift)).astype(ids), (und & mask).astype(ids),
+                 uses - backward, backward)
+
+
+# --- connected components -----------------------------------------------------------------------
+def connected_components(n: int, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(n,) label of each node: the smallest node of its component (graph edges u[i]–v[i]).
+
+    Hook every root onto the smallest root across its edges (np.minimum.at), then jump pointers
+    until every node points at a root; edges inside one tree are dropped each round. Labels only
+    decrease, so no cycle forms; meshes with ids in file order settle in a handful of rounds.
+    """
+    parent = np.arange(n, dtype=id_dtype(n))
+    if u.size:  # first round: every node hooks onto a smaller neighbour, a plain assignment
+        lo, hi = np.minimum(u, v), np.maximum(u, v)
+        parent[hi[::-1]] = lo[::-1]  # any winner is smaller; sorted input makes it the smallest
+        _jump_to_roots(parent)
+    while u.size:  # u, v: roots as of the last round of the ends of the edges still between trees
+        u, v = parent[u], parent[v]
+        cross = u != v
+        if not np.any(cross):
+            break
+        u, v = u[cross], v[cross]
+        np.minimum.at(parent, np.maximum(u, v), np.minimum(u, v))
+        _jump_to_roots(parent)
+    return parent
+
+
+def _jump_to_roots(parent: np.ndarray) -> None:
+    """Pointer jumping, in place, until every node points at a root."""
+    while True:
+        grand = parent[parent]
+        if np.array_equal(grand, parent):
+            return
+        parent[:] = grand
+
+
+def consistent_flips(tri: np.ndarray, n_ids: int) -> np.ndarray | None:
+    """(t,) bool: the triangles to reverse so that every edge shared by exactly two triangles is
+    used once each way; in each edge-connected piece the smaller class is chosen (ties keep the
+    piece's first triangle). None if no such choice exists (a Möbius strip, a Klein bottle).
+
+    How: on the double cover, node 2f is triangle f kept and 2f+1 reversed; an edge joins the
+    states of two neighbours that agree. The surface is orientable iff no triangle's two states
+    fall in one component (the same labelling also separates the two orientation classes).
+    """
+    t = tri.shape[0]
+    keys = _edge_keys(tri, _key_shift(n_ids))
+    order = np.argsort(keys)
+    keys = keys[order]
+    und = keys >> np.uint64(1)
+    new = np.concatenate(([True], und[1:] != und[:-1], [True]))
+    starts = np.flatnonzero(new[:-1])
+    pair = starts[np.diff(np.flatnonzero(new)) == 2]  # edges used by exactly two triangles
+    f, g = order[pair] // 3, order[pair + 1] // 3
+    agree = (keys[pair] & np.uint64(1)) != (keys[pair + 1] & np.uint64(1))  # opposite directions
+    flip = (~agree).astype(np.int64)
+    node_u = np.concatenate((2 * f, 2 * f + 1))
+    node_v = np.concatenate((2 * g + flip, 2 * g + 1 - flip))
+    ids = id_dtype(2 * t)
+    label = connected_components(2 * t, node_u.astype(ids), node_v.astype(ids))
+    kept, reversed_ = label[0::2], label[1::2]
+    if np.any(kept == reversed_):
+        return None
+    piece = np.minimum(kept, reversed_) // 2  # first triangle of the edge-connected piece
+    change = kept != kept[piece]
+    n_change = np.bincount(piece, weights=change, minlength=t)
+    n_total = np.bincount(piece, minlength=t)
+    return change ^ (2 * n_change > n_total)[piece]
+
+
+# --- geometry -----------------------------------------------------------------------------------
+def is_soup(faces: np.ndarray, n_vertices: int) -> bool:
+    """faces is [[0, 1, 2], [3, 4, 5], ...] over all vertices, the layout of an STL file."""
+    if faces.shape[0] * 3 != n_vertices:
+        return False
+    flat = faces.reshape(-1)
+    return all(np.array_equal(flat[lo : lo + _CHUNK], np.arange(lo, min(lo + _CHUNK, flat.size)))
+               for lo in range(0, flat.size, _CHUNK))
+
+
+def signed_volumes6(vertices: np.ndarray, faces: np.ndarray | None, origin: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Per triangle: 6 × the signed volume of the tetrahedron (origin, triangle), m³ (m,) float64,
+    and whether its area is exactly zero (m,) bool. ``faces`` None means the soup layout (see
+    `is_soup`). Taken about a point near the mesh, so round-off scales with the mesh's size."""
+    m = vertices.shape[0] // 3 if faces is None else faces.shape[0]
+    det = np.empty(m)
+    flat = np.empty(m, bool)
+    step = _CHUNK // 8  # many operations per block: keep the block in L1/L2
+    v9 = vertices.reshape(-1, 9) if faces is None else None
+
+    def fill(start: int, stop: int) -> None:
+        for lo in range(start, stop, step):
+            hi = min(lo + step, stop)
+            if v9 is not None:
+                c = v9[lo:hi].T.copy()  # (9, c): contiguous rows
+            else:
+                c = np.take(vertices, faces[lo:hi], axis=0).reshape(-1, 9).T.copy()
+            x0, y0, z0, x1, y1, z1, x2, y2, z2 = c
+            x1 -= x0
+            y1 -= y0
+            z1 -= z0
+            x2 -= x0
+            y2 -= y0
+            z2 -= z0
+            x0 -= origin[0]
+            y0 -= origin[1]
+            z0 -= origin[2]
+            nx, ny, nz = y1 * z2, z1 * x2, x1 * y2  # n = (p1 - p0) × (p2 - p0), written out
+            nx -= z1 * y2
+            ny -= x1 * z2
+            nz -= y1 * x2
+            d = det[lo:hi]
+            np.multiply(x0, nx, out=d)
+            d += y0 * ny
+            d += z0 * nz
+            f = flat[lo:hi]
+            np.equal(nx, 0, out=f)
+            f &= ny == 0
+            f &= nz == 0
+
+    fill(0, m)
+    return det, flat
+
+
+def area_vector_sums(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, float]:
+    """Σ of the triangles' area vectors (3,) m² (zero for a closed surface) and Σ of their areas."""
+    total, area = np.zeros(3), 0.0
+    for lo in range(0, faces.shape[0], _CHUNK):
+        f = faces[lo : lo + _CHUNK]
+        p0 = np.take(vertices, f[:, 0], axis=0)
+        n = np.cross(np.take(vertices, f[:, 1], axis=0) - p0,
+                     np.take(vertices, f[:, 2], axis=0) - p0)
+        total += n.sum(axis=0) / 2
+        area += float(np.linalg.norm(n, axis=1).sum()) / 2
+    return total, area
+
+
+def winding_numbers(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(q,) winding number of each point (q, 3) w.r.t. triangles (t, 3, 3): Σ signed solid angle
+    / 4π, Van Oosterom & Strackee (1983). 1 inside a closed outward surface, 0 outside, -1 inside
+    an inward one; not an integer for an open surface. NaN for a point on one of the triangles
+    (to ~1e-9 relative), where the solid angle jumps by 4π and the sign of a zero decides."""
+    q = points.shape[0]
+    w = np.zeros(q)
+    on = np.zeros(q, bool)
+    p = [points[:, k : k + 1] for k in range(3)]  # (q, 1) columns broadcast against (1, c)
+    step = max(1, _CHUNK // 2 // max(q, 1))
+    t9 = triangles.reshape(-1, 9)
+    for lo in range(0, t9.shape[0], step):
+        c = t9[lo : lo + step].T
+        ax, ay, az, bx, by, bz, cx, cy, cz = (c[k] - p[k % 3] for k in range(9))  # (q, c) each
+        la = np.sqrt(ax * ax + ay * ay + az * az)
+        lb = np.sqrt(bx * bx + by * by + bz * bz)
+        lc = np.sqrt(cx * cx + cy * cy + cz * cz)
+        num = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+        den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
+               + (ax * cx + ay * cy + az * cz) * lb + (bx * cx + by * cy + bz * cz) * la)
+        scale = 1e-9 * la * lb * lc  # in the plane and not outside the triangle: on it
+        on |= np.any((np.abs(num) <= scale) & (den <= scale), axis=1)
+        w += np.arctan2(num, den).sum(axis=1)
+    w /= 2 * np.pi
+    w[on] = np.nan
+    return w
