@@ -16,9 +16,10 @@ Methods:
   not grow with φ.
 
 The scalar kernels (``k_from_m1``, ``jacobi``, ``jacobi_reduced``, ``rf``, ``rd``, ``rj``, ``rc1``,
-``legendre_f``, ``legendre_pi_minus_f``) use only floats and the math module so numba can compile
-them unchanged; the array functions (``ellipk``, ``ellipj``, ``ellipf``, ``ellippi``,
-``carlson_rf``, ``carlson_rd``, ``carlson_rj``) validate and broadcast.
+``legendre_f``, ``legendre_pi_minus_f``) use only floats and the math module and are compiled
+with numba (``massprops.dynamics._jit``), so compiled kernels can call them; the array functions
+(``ellipk``, ``ellipj``, ``ellipf``, ``ellippi``, ``carlson_rf``, ``carlson_rd``, ``carlson_rj``)
+validate and broadcast.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import math
 
 import numpy as np
 
+from massprops.dynamics._jit import jit
 from massprops.errors import UsageError
 
 __all__ = [
@@ -55,6 +57,7 @@ _MAX_ITER = 200
 
 
 # --- complete integral -------------------------------------------------------------------------
+@jit
 def k_from_m1(m1: float) -> float:
     """K(m), the quarter period, from the complementary parameter m1 = 1 - m in [0, 1].
 
@@ -71,6 +74,7 @@ def k_from_m1(m1: float) -> float:
 
 
 # --- Jacobi elliptic functions --------------------------------------------------------------------
+@jit
 def _jacobi_half(v: float, m: float, m1: float) -> tuple[float, float, float]:
     """(sn, cn, dn)(v | m) for 0 <= v <= K/2, each to a few ulps relative.
 
@@ -108,6 +112,7 @@ def _jacobi_half(v: float, m: float, m1: float) -> tuple[float, float, float]:
     return math.sqrt(y * (2.0 - y)), c, d
 
 
+@jit
 def jacobi_reduced(u: float, m: float, m1: float, kk: float) -> tuple[float, float, float, float]:
     """Reduce u to ur = u - 2 j K in [-K, K] and evaluate there.
 
@@ -135,6 +140,7 @@ def jacobi_reduced(u: float, m: float, m1: float, kk: float) -> tuple[float, flo
     return j, math.copysign(s, ur), c, d
 
 
+@jit
 def jacobi(u: float, m: float, m1: float) -> tuple[float, float, float, float]:
     """(sn, cn, dn, am)(u | m) for 0 <= m <= 1 with m1 = 1 - m given explicitly."""
     j, s, c, d = jacobi_reduced(u, m, m1, k_from_m1(m1))
@@ -143,6 +149,7 @@ def jacobi(u: float, m: float, m1: float) -> tuple[float, float, float, float]:
 
 
 # --- Carlson's symmetric integrals ---------------------------------------------------------------
+@jit
 def rf(x: float, y: float, z: float) -> float:
     """R_F(x, y, z) = ½ ∫₀^∞ dt / sqrt((t+x)(t+y)(t+z)); x, y, z >= 0, at most one zero.
 
@@ -170,6 +177,7 @@ def rf(x: float, y: float, z: float) -> float:
     return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / math.sqrt(a)
 
 
+@jit
 def rc1(e: float, one_plus_e: float) -> float:
     """R_C(1, 1 + e) for e > -1, given 1 + e separately (accurate even when it is tiny).
 
@@ -188,6 +196,7 @@ def rc1(e: float, one_plus_e: float) -> float:
     return math.log((1.0 + r) / math.sqrt(one_plus_e)) / r
 
 
+@jit
 def _series_rj(xx: float, yy: float, zz: float, pp: float) -> float:
     """Carlson's fifth-order series shared by R_J and R_D (pp: the p deviation)."""
     e2 = xx * yy + xx * zz + yy * zz - 3.0 * pp * pp
@@ -198,6 +207,7 @@ def _series_rj(xx: float, yy: float, zz: float, pp: float) -> float:
             - 9.0 * e2 * e3 / 52.0 + 3.0 * e5 / 26.0)
 
 
+@jit
 def rj(x: float, y: float, z: float, p: float) -> float:
     """R_J(x, y, z, p) = 3/2 ∫₀^∞ dt / ((t+p) sqrt((t+x)(t+y)(t+z))); x, y, z >= 0 (at most one
     zero), p > 0. Carlson's duplication with the R_C(1, 1 + e_m) terms, relative error ~1e-15."""
@@ -228,6 +238,7 @@ def rj(x: float, y: float, z: float, p: float) -> float:
     return fac * _series_rj(xx, yy, zz, pp) / (a * math.sqrt(a)) + 6.0 * total
 
 
+@jit
 def rd(x: float, y: float, z: float) -> float:
     """R_D(x, y, z) = R_J(x, y, z, z); x, y >= 0 (not both zero), z > 0. Carlson's duplication."""
     if not (x >= 0.0 and y >= 0.0 and z > 0.0):
@@ -252,6 +263,7 @@ def rd(x: float, y: float, z: float) -> float:
 
 
 # --- Legendre integrals from the sine and cosine of the amplitude --------------------------------
+@jit
 def legendre_f(s: float, c: float, m1: float) -> float:
     """F(φ | m) for |φ| <= π/2 given s = sin φ, c = cos φ >= 0 and m1 = 1 - m.
 
@@ -262,6 +274,7 @@ def legendre_f(s: float, c: float, m1: float) -> float:
     return s * rf(c2, c2 + m1 * s * s, 1.0)
 
 
+@jit
 def legendre_pi_minus_f(n: float, s: float, c: float, d: float) -> float:
     """Π(n; φ | m) - F(φ | m) for |φ| <= π/2, n < 1, given s = sin φ, c = cos φ >= 0 and
     d = sqrt(1 - m s²) (dn when φ = am u): (n/3) s³ R_J(c², d², 1, 1 - n s²).
@@ -273,6 +286,7 @@ def legendre_pi_minus_f(n: float, s: float, c: float, d: float) -> float:
     return n / 3.0 * s * s * s * rj(c * c, d * d, 1.0, 1.0 - n * s * s)
 
 
+@jit
 def _reduce_amplitude(phi: float) -> tuple[float, float, float]:
     """φ = j π + φr with |φr| <= π/2: returns (j, sin φr, cos φr) with cos φr >= 0."""
     if not abs(phi) < math.inf:
@@ -284,6 +298,7 @@ def _reduce_amplitude(phi: float) -> tuple[float, float, float]:
     return j, math.sin(r), abs(math.cos(r))
 
 
+@jit
 def _f_scalar(phi: float, m1: float) -> float:
     j, s, c = _reduce_amplitude(phi)
     if j == 0.0:
@@ -291,6 +306,7 @@ def _f_scalar(phi: float, m1: float) -> float:
     return 2.0 * j * k_from_m1(m1) + legendre_f(s, c, m1)
 
 
+@jit
 def _pi_scalar(n: float, phi: float, m: float, m1: float) -> float:
     if not n < 1.0:
         return math.nan

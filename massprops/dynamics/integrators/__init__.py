@@ -46,7 +46,9 @@ with one ``SPEC`` and one line in ``_BUILT_IN`` below):
 
 The methods: ``rk4`` (fixed, order 4), ``dop853`` (adaptive, order 8), ``implicit`` (Radau IIA,
 fixed, order 5, L-stable: damps a stiff mode out), ``midpoint`` (implicit midpoint, fixed,
-order 2, symplectic: keeps a stiff linear mode's energy, aliases its phase). ``spec.stiff``
+order 2, symplectic: keeps a stiff linear mode's energy, aliases its phase), ``splitting``,
+``splitting4``, ``splitting6`` (exact free rotations and force kicks, Strang and its McLachlan /
+Kahan-Li compositions, fixed, orders 2, 4, 6: for fast spin and long conservative runs). ``spec.stiff``
 marks the ones stable far beyond the explicit step limit.
 
 ``exact`` (kind "exact") is the closed-form torque-free body: it takes no step and its cost does
@@ -61,11 +63,11 @@ a second.
 
 from __future__ import annotations
 
-from massprops.dynamics.integrators import closed_form, dop853, midpoint, radau, rk4
+from massprops.dynamics.integrators import closed_form, dop853, midpoint, radau, rk4, splitting
 from massprops.dynamics.integrators.base import IntegratorSpec
 
 _BUILT_IN: tuple[IntegratorSpec, ...] = (closed_form.SPEC, rk4.SPEC, dop853.SPEC, radau.SPEC,
-                                         midpoint.SPEC)
+                                         midpoint.SPEC, *splitting.SPECS)
 
 INTEGRATORS: dict[str, IntegratorSpec] = {spec.name: spec for spec in _BUILT_IN}
 """name -> IntegratorSpec; the CLI's choices and the scene's ``time.integrator`` come from here."""
