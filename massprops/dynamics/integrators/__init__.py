@@ -48,8 +48,8 @@ The methods: ``rk4`` (fixed, order 4), ``dop853`` (adaptive, order 8), ``implici
 fixed, order 5, L-stable: damps a stiff mode out), ``midpoint`` (implicit midpoint, fixed,
 order 2, symplectic: keeps a stiff linear mode's energy, aliases its phase), ``splitting``,
 ``splitting4``, ``splitting6`` (exact free rotations and force kicks, Strang and its McLachlan /
-Kahan-Li compositions, fixed, orders 2, 4, 6: for fast spin and long conservative runs). ``spec.stiff``
-marks the ones stable far beyond the explicit step limit.
+Kahan-Li compositions, fixed, orders 2, 4, 6: for fast spin and long conservative runs).
+``spec.stiff`` marks the ones stable far beyond the explicit step limit.
 
 ``exact`` (kind "exact") is the closed-form torque-free body: it takes no step and its cost does
 not depend on t; simulate offers it only for torque-free scenes with constant forces.
