@@ -170,11 +170,19 @@ def _taylor_reference(inertia, w0, q0, t_end, order=30, step=0.25):
                     d[2] += qw * wy - qx * wz + qz * wx
                     d[3] += qw * wz + qx * wy - qy * wx
                 qs.append([x / (2 * (k + 1)) for x in d])
-            w = [mpmath.polyval([c[i] for c in reversed(ws)], dt) for i in range(3)]
-            q = [mpmath.polyval([c[i] for c in reversed(qs)], dt) for i in range(4)]
+            w = [_horner([c[i] for c in ws], dt) for i in range(3)]
+            q = [_horner([c[i] for c in qs], dt) for i in range(4)]
             t += dt
         norm = mpmath.sqrt(mpmath.fsum(x * x for x in q))
         return np.array([float(x) for x in w]), np.array([float(x / norm) for x in q])
+
+
+def _horner(ascending, x):
+    """Σ c_k x^k (coefficients lowest power first); mpmath.polyval's order is version-dependent."""
+    acc = mpmath.mpf(0)
+    for c in reversed(ascending):
+        acc = acc * x + c
+    return acc
 
 
 Q0 = np.array([0.5, 0.1, -0.7, 0.3]) / np.linalg.norm([0.5, 0.1, -0.7, 0.3])
