@@ -233,3 +233,53 @@ def test_cli_unknown_integrator_exit_2(run, tmp_path):
     sc = _write_scene(tmp_path, "body: {mass: 1, inertia: [[1,0,0],[0,1,0],[0,0,1]]}\n"
                                 "time: {duration: 1}\n")
     assert run("simulate", "--integrator", "euler", sc).exit_code == 2
+
+
+def test_ctrl_c_keeps_what_was_computed():
+    calls = []
+
+    def interrupt_on_third(fraction):
+        calls.append(fraction)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+
+    ini = InitialState(angular_velocity=np.array([0.3, 1.0, 0.2]))
+    sc = scene(body=ASYM, forces=[Torque(np.array([0.0, 0.1, 0.0]), "body")], duration=10.0,
+               integrator="rk4", step=1e-5, initial=ini)
+    res = simulate(sc, every=0.01, progress=interrupt_on_third)
+    tr = res.trajectory
+    assert res.interrupted and 0 < tr.t[-1] < 10.0
+    assert np.all(np.isfinite(tr.position)) and np.all(np.isfinite(tr.orientation))
+    assert np.all(np.diff(tr.t) > 0) and res.diagnostics["error_estimate"] is None
+
+
+def test_cli_interrupted_run_writes_and_exits_130(run, tmp_path, monkeypatch):
+    import massprops.dynamics.simulate as sim
+
+    real = sim.simulate
+
+    def interrupted(scene, **kw):
+        kw["progress"] = _raise_at_second_call()
+        return real(scene, **kw)
+
+    monkeypatch.setattr(sim, "simulate", interrupted)
+    sc = _write_scene(tmp_path, "body: {mass: 2, inertia: [[1,0,0],[0,2,0],[0,0,3]]}\n"
+                                "initial: {angular_velocity: [0.3, 1.0, 0.2]}\n"
+                                "forces: [{type: torque, vector: [0, 0.1, 0]}]\n"
+                                "time: {duration: 10.0, integrator: rk4, step: 1.0e-5}\n"
+                                "output: {every: 0.01, file: out.npz}\n")
+    res = run("simulate", "--json", sc)
+    assert res.exit_code == 130 and "interrupted" in res.stderr
+    with np.load(tmp_path / "out.npz") as data:
+        assert 0 < data["t"][-1] < 10.0 and np.all(np.isfinite(data["orientation"]))
+
+
+def _raise_at_second_call():
+    count = [0]
+
+    def progress(fraction):
+        count[0] += 1
+        if count[0] == 2:
+            raise KeyboardInterrupt
+
+    return progress

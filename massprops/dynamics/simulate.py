@@ -327,6 +327,7 @@ class _Runner:
         self.wall, self.warmup = 0.0, 0.0
         self.failure: str | None = None
         self.y_last = None
+        self.t_now = 0.0
 
     def run(self, y0: np.ndarray, t_out: np.ndarray):
         p = self.program
@@ -336,18 +337,18 @@ class _Runner:
         edges = np.concatenate([[0.0], p.breakpoints(0.0, self.duration), [self.duration]])
         self._warm_up(y0, rot_only)
         start = time.perf_counter()
-        t_now, interrupted = 0.0, False
+        self.t_now, interrupted = 0.0, False
         try:
             for t0, t1 in zip(edges[:-1], edges[1:]):
                 active = p.active(0.5 * (t0 + t1))
-                t_now = self._segment(y_full, t0, t1, active, rot_only, t_out, y_out)
+                self._segment(y_full, t0, t1, active, rot_only, t_out, y_out)
                 if self.failure is not None:
                     break
-        except KeyboardInterrupt:
+        except KeyboardInterrupt:  # y_full and self.t_now hold the last finished chunk
             interrupted = True
         self.wall = time.perf_counter() - start
         self.y_last = y_full
-        return y_out, t_now, interrupted
+        return y_out, self.t_now, interrupted
 
     def _warm_up(self, y0: np.ndarray, rot_only: bool) -> None:
         """Compile or load the kernel from cache on a tiny problem; timed apart from the run."""
@@ -360,8 +361,9 @@ class _Runner:
                               np.zeros(5, dtype=np.int64))
         self.warmup = time.perf_counter() - start
 
-    def _segment(self, y_full, t0, t1, active, rot_only, t_out, y_out) -> float:
-        """Advance y_full (13,) from t0 to t1 in chunks, fill the samples, return t reached."""
+    def _segment(self, y_full, t0, t1, active, rot_only, t_out, y_out) -> None:
+        """Advance y_full (13,) from t0 to t1 in chunks and fill the samples; self.t_now follows
+        the time reached after every chunk (so Ctrl-C keeps it)."""
         p = self.program
         first = t0 == 0.0
         sel = np.flatnonzero((t_out >= t0) & (t_out <= t1) if first else
@@ -392,18 +394,15 @@ class _Runner:
                 y_full[:] = y
             good = t_out[idx] <= t_reached
             y_out[idx[good]] = ys[good]
-            if self.stats[4] != 0:
+            self.t_now = t_reached
+            if self.stats[4] != 0 or t_reached < t_end:  # NaN, underflow, or stopped early
                 self.failure = self._failure_message(t_reached)
-                return t_reached
-            if t_reached < t_end:  # the kernel stopped early without a status: treat as failure
-                self.failure = self._failure_message(t_reached)
-                return t_reached
+                return
             if self.progress is not None:
                 self.progress(t_end / self.duration)
             taken = max(int(self.stats[0]) - steps_before, 1)
             length = (t_end - t) * min(16.0, max(0.5, CHUNK_STEPS / taken))
             t = t_end
-        return t1
 
     def _first_chunk(self, t0: float, t1: float) -> float:
         if self.spec.kind == "exact":  # no steps: one evaluation per sample, cost independent of t
