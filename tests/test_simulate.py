@@ -283,3 +283,17 @@ def _raise_at_second_call():
             raise KeyboardInterrupt
 
     return progress
+
+
+def test_nan_divergence_names_time_and_stiff_rate():
+    # k = 1e10 on 1 kg: rate 1e5/s, rk4's limit 2.8e-5 s; h = 1e-3 overflows to NaN in a few steps
+    unit = RigidBody.from_inertia(1.0, np.eye(3))
+    sc = scene(body=unit, forces=[Spring(np.zeros(3), 1e10)], duration=1.0, integrator="rk4",
+               step=1e-3, initial=InitialState(position=np.array([1e-3, 0, 0])))
+    with pytest.raises(DivergenceError) as info:
+        simulate(sc)
+    message = str(info.value)
+    assert "NaN or infinite" in message and "t = " in message
+    assert "1e+05" in message and "implicit" in message
+    partial = info.value.partial
+    assert partial is not None and np.all(np.isfinite(partial.trajectory.position))

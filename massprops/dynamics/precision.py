@@ -43,6 +43,10 @@ AT_REFERENCE = 3.0
 """A ladder stops once a run's error is within this factor of the reference's own accuracy:
 finer rungs would only measure the reference."""
 
+MAX_RUN_S = 1.0
+"""A ladder stops after a rung that took longer than this: the next one would take twice as long
+(fixed steps halve), and the diagram has its shape by then."""
+
 MIN_TIMED_S = 0.2
 """Short runs are repeated (up to 5 times) until they have used this much time; best is kept."""
 
@@ -120,7 +124,7 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
         if name not in done:
             run = _rung(scene, program, INTEGRATORS[name], setting, t_out, truth, scales)
             runs.append(run)
-            if run.error is not None and run.error <= floor:
+            if (run.error is not None and run.error <= floor) or run.wall_time_s > MAX_RUN_S:
                 done.add(name)
         if progress is not None:
             progress((i + 1) / len(plan))

@@ -419,3 +419,11 @@ class _Runner:
         h = (t1 - t0) / n
         k = round((t - t0) / h) + max(1, round(length / h))
         return t1 if k >= n else t0 + k * h
+
+    def _failure_message(self, t_reached: float) -> str:
+        status = int(self.stats[4])
+        what = "the state became NaN or infinite" if status == 1 else \
+            "the step size fell below round-off (the problem is stiff or singular there)" \
+            if status == 2 else "the integrator stopped early"
+        return (f"{self.spec.name} diverged at t = {t_reached:.6g} s: {what}; "
+                + _stability_hint(self.program, self.setting, self.spec.name))
