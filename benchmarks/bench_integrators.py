@@ -26,9 +26,11 @@ import tempfile
 import time
 
 import numpy as np
+from _scipy_model import check_same_equations
+from _scipy_model import numpy_rhs as numpy_rhs_of
 from scipy.integrate import solve_ivp
 
-from massprops.dynamics.forces import compile_forces, rhs
+from massprops.dynamics.forces import compile_forces
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.model import (
     Gravity,
@@ -54,39 +56,20 @@ TARGETS = (1e-6, 1e-10)
 LADDER = 10.0 ** -np.arange(3.0, 14.01, 0.5)
 
 
-def program():
+def scene() -> Scene:
     body = RigidBody(MASS, MOMENTS, np.eye(3), np.zeros(3), 1.0)
     forces = (Gravity(G), Torque(TORQUE_BODY, "body"), PointForce(FORCE, point=FORCE_ARM),
               Spring(ANCHOR, K, point=SPRING_ARM))
-    return compile_forces(Scene(body, InitialState(), forces, TimeSettings(1.0), OutputSettings()))
+    return Scene(body, InitialState(), forces, TimeSettings(1.0), OutputSettings())
 
 
-def numpy_rhs(t, y):
-    """The same Newton-Euler equations in plain numpy (what a scipy user would write)."""
-    r, v, q, w = y[0:3], y[3:6], y[6:10], y[10:13]
-    q0, q1, q2, q3 = q
-    a = np.array([[1 - 2 * (q2 * q2 + q3 * q3), 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2)],
-                  [2 * (q1 * q2 + q0 * q3), 1 - 2 * (q1 * q1 + q3 * q3), 2 * (q2 * q3 - q0 * q1)],
-                  [2 * (q1 * q3 - q0 * q2), 2 * (q2 * q3 + q0 * q1), 1 - 2 * (q1 * q1 + q2 * q2)]])
-    spring_force = -K * (r + a @ SPRING_ARM - ANCHOR)
-    force = MASS * G + FORCE + spring_force
-    torque = TORQUE_BODY + np.cross(FORCE_ARM, a.T @ FORCE) + np.cross(SPRING_ARM,
-                                                                        a.T @ spring_force)
-    qdot = 0.5 * np.array([-q1 * w[0] - q2 * w[1] - q3 * w[2], q0 * w[0] + q2 * w[2] - q3 * w[1],
-                           q0 * w[1] + q3 * w[0] - q1 * w[2], q0 * w[2] + q1 * w[1] - q2 * w[0]])
-    wdot = (torque - np.cross(w, MOMENTS * w)) / MOMENTS
-    return np.concatenate([v, force / MASS, qdot, wdot])
+def program():
+    return compile_forces(scene())
 
 
-def check_same_equations(p) -> None:
-    rng = np.random.default_rng(0)
-    out = np.empty(13)
-    for _ in range(5):
-        y = rng.normal(size=13)
-        y[6:10] /= np.linalg.norm(y[6:10])
-        rhs(y, p.active(0.0), p.codes, p.params, p.mass, p.inertia, False, out)
-        if not np.allclose(out, numpy_rhs(0.0, y), rtol=1e-12, atol=1e-12):
-            raise SystemExit("the numpy right-hand side differs from the compiled one")
+numpy_rhs = numpy_rhs_of(scene())
+"""The same Newton-Euler equations in plain numpy (benchmarks/_scipy_rhs.py, shared with
+bench_precision.py and bench_simulate.py); checked against the compiled one before timing."""
 
 
 def ours(p, rtol: float, duration: float):
@@ -126,8 +109,8 @@ def at_target(run, reference, target, repeat):
 
 def cold_compile_seconds() -> float:
     """First call in a fresh process with an empty numba cache (so: a real compile)."""
-    code = ("import time, numpy as np; s = time.perf_counter(); "
-            "import benchmarks.bench_integrators as b; b.ours(b.program(), 1e-6, 1.0); "
+    code = ("import sys, time; sys.path.insert(0, 'benchmarks'); s = time.perf_counter(); "
+            "import bench_integrators as b; b.ours(b.program(), 1e-6, 1.0); "
             "print(time.perf_counter() - s)")
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
@@ -144,7 +127,7 @@ def main() -> None:
     parser.add_argument("--no-cold", action="store_true", help="skip the cold-compile timing")
     args = parser.parse_args()
     p = program()
-    check_same_equations(p)
+    check_same_equations(scene())
     start = time.perf_counter()
     ours(p, 1e-6, 1e-3)
     first_call = time.perf_counter() - start
