@@ -127,9 +127,10 @@ def print_simulation(scene, result) -> None:
                       ("angular_velocity_body", "rad/s, body")):
         _row(head, f"{key.replace('_', ' ')} [{unit}]",
                      "(" + ", ".join(f"{x:.10g}" for x in final[key]) + ")")
+    why_none = {"error_estimate": "n/a (run interrupted, or its companion run diverged)"}
     for key, value in result.diagnostics.items():
-        _row(head, key.replace("_", " "), "n/a (not conserved here)" if value is None
-                     else f"{value:.3g}")
+        _row(head, key.replace("_", " "), f"{value:.3g}" if value is not None
+             else why_none.get(key, "n/a (not conserved in this scene)"))
     if result.interrupted:
         _row(head, "interrupted", "yes: the results stop at the time above")
     _console.print(head)
