@@ -50,7 +50,13 @@ class Scales:
 
 
 def state_error(a, b, scales: Scales) -> float:
-    """The contract's error between trajectories ``a`` and ``b`` at the times both have."""
+    """The contract's error between trajectories ``a`` and ``b`` at the times both have (inf when
+    either ran away: huge finite states overflow to inf, not to a warning)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _state_error(a, b, scales)
+
+
+def _state_error(a, b, scales: Scales) -> float:
     common, ia, ib = np.intersect1d(a.t, b.t, return_indices=True)
     if common.size == 0:
         return float("inf")

@@ -263,8 +263,15 @@ def energy(states: np.ndarray, program: ForceProgram, active: np.ndarray | None 
            ) -> np.ndarray:
     """Total mechanical energy (J) of full-layout states (n, 13): kinetic + gravity + springs.
 
-    Only meaningful for conservative scenes (the caller decides); numpy, not a hot path.
+    Only meaningful for conservative scenes (the caller decides); numpy, not a hot path. A
+    diverging run's finite but huge states overflow to inf here (the caller reports divergence)
+    rather than raising a RuntimeWarning.
     """
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _energy(states, program, active)
+
+
+def _energy(states: np.ndarray, program: ForceProgram, active: np.ndarray | None) -> np.ndarray:
     s = np.atleast_2d(states)
     r, v, q, w = s[:, 0:3], s[:, 3:6], s[:, 6:10], s[:, 10:13]
     e = 0.5 * program.mass * np.einsum("ij,ij->i", v, v)

@@ -70,9 +70,11 @@ def all_finite(a):
 
 
 @njit(cache=True)
-def start_scales(y, blk, scales):
-    """scales (4,) := largest |component| of each block of y; the quaternion's scale is 1."""
-    scales[:] = 0.0
+def start_scales(y, blk, scales, floors):
+    """scales (4,) := largest |component| of each block of y, at least ``floors`` (4,) (the
+    body size, size/duration, 1/duration: a block that is zero plus round-off noise would
+    otherwise ask for noise-level accuracy and stall the step); the quaternion's scale is 1."""
+    scales[:] = floors
     grow_scales(y, blk, scales)
     scales[Q_BLOCK] = 1.0
 

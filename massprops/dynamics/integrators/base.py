@@ -55,12 +55,14 @@ class IntegratorSpec:
             raise ValueError(f"integrator {self.name!r}: the description must be one line")
 
 
-def segment_runner(name: str, kind: str, kernel) -> RunSegment:
+def segment_runner(name: str, kind: str, kernel, *, scaled: bool = False) -> RunSegment:
     """The contract's ``run_segment`` for ``kernel``: checks the arguments once per segment (not
     per step), then hands everything to the compiled kernel.
 
     kernel(y, t0, t1, setting, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-    stats) -> (err, t_reached), compiled with numba.
+    stats[, floors]) -> (err, t_reached), compiled with numba. ``scaled`` kernels measure errors
+    per block and take ``floors`` (4,): the smallest scale of the r, v, q, ω blocks, the optional
+    sixth entry of program_arrays (zeros when absent).
     """
     what = "step" if kind == "fixed" else "rtol"
     fix = "time.step (or --step)" if kind == "fixed" else "time.rtol (or --rtol)"
@@ -74,9 +76,13 @@ def segment_runner(name: str, kind: str, kernel) -> RunSegment:
             raise UsageError(f"integrator {name}: rtol {setting!r} is below round-off "
                              f"(2.2e-16); set {fix} to at least 1e-15")
         check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats)
-        active, codes, params, mass, inertia = program_arrays
+        active, codes, params, mass, inertia = program_arrays[:5]
+        if not scaled:
+            return kernel(y, t0, t1, setting, active, codes, params, float(mass), inertia,
+                          rot_only, t_out, y_out, stats)
+        floors = program_arrays[5] if len(program_arrays) > 5 else np.zeros(4)
         return kernel(y, t0, t1, setting, active, codes, params, float(mass), inertia,
-                      rot_only, t_out, y_out, stats)
+                      rot_only, t_out, y_out, stats, floors)
 
     run_segment.__name__ = f"run_segment_{name}"
     run_segment.__doc__ = (f"Advance y in place from t0 to t1 with {name} ({kind}; setting = "

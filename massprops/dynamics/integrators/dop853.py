@@ -159,7 +159,7 @@ def _dense_row(cont, s, out, o):
 
 @njit(cache=True)
 def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-            stats):
+            stats, floors):
     prog = (active, codes, params, mass, inertia, rot_only)
     n = y.shape[0]
     o = quat_offset(n)
@@ -169,7 +169,7 @@ def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_o
         return 0.0, t0
     blk = blocks(n)
     scales, trial = np.empty(4), np.empty(4)
-    start_scales(y, blk, scales)
+    start_scales(y, blk, scales, floors)
     k = np.empty((16, n))
     cont = np.empty((8, n))
     ynew, tmp = np.empty(n), np.empty(n)
@@ -236,4 +236,4 @@ def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_o
 SPEC = IntegratorSpec(
     name="dop853", kind="adaptive", order=8,
     description="Dormand-Prince 8(5,3), adaptive step (time.rtol), 7th-order dense output",
-    run_segment=segment_runner("dop853", "adaptive", _kernel))
+    run_segment=segment_runner("dop853", "adaptive", _kernel, scaled=True))

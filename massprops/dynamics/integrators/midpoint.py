@@ -147,7 +147,7 @@ def _richardson(y, h, y_full, jac, prog, lu, piv, g, tmp, fz, blk, scales, trial
 
 @njit(cache=True)
 def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-            stats):
+            stats, floors):
     prog = (active, codes, params, mass, inertia, rot_only)
     n = y.shape[0]
     o = quat_offset(n)
@@ -158,7 +158,7 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
     big_h = (t1 - t0) / m
     blk = blocks(n)
     scales, trial = np.empty(4), np.empty(4)
-    start_scales(y, blk, scales)
+    start_scales(y, blk, scales, floors)
     fa, fb, ynew, tmp, tmp2, g = (np.empty(n), np.empty(n), np.empty(n), np.empty(n),
                                   np.empty(n), np.empty(n))
     z, y_last, mid = np.zeros(n), np.empty(n), np.empty(n)
@@ -252,4 +252,4 @@ SPEC = IntegratorSpec(
     name="midpoint", kind="fixed", order=2,
     description="implicit midpoint, fixed step (time.step): symplectic, keeps quadratic "
                 "invariants",
-    run_segment=segment_runner("midpoint", "fixed", _kernel), stiff=True)
+    run_segment=segment_runner("midpoint", "fixed", _kernel, scaled=True), stiff=True)

@@ -238,7 +238,7 @@ def _emit(y, z, t, h, t_next, ynew, qpoly, t_out, y_out, k, o):
 
 @njit(cache=True)
 def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-            stats):
+            stats, floors):
     prog = (active, codes, params, mass, inertia, rot_only)
     n = y.shape[0]
     o = quat_offset(n)
@@ -249,7 +249,7 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
     big_h = (t1 - t0) / m
     blk = blocks(n)
     scales, trial = np.empty(4), np.empty(4)
-    start_scales(y, blk, scales)
+    start_scales(y, blk, scales, floors)
     f0, ynew, y_last, tmp, tmp2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     jac, lr, pr = np.empty((n, n)), np.empty((n, n)), np.empty(n, dtype=np.int64)
     lc, pc = np.empty((2 * n, 2 * n)), np.empty(2 * n, dtype=np.int64)
@@ -326,4 +326,4 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
 SPEC = IntegratorSpec(
     name="implicit", kind="fixed", order=5,
     description="Radau IIA order 5, fixed step (time.step), L-stable: for stiff springs/dampers",
-    run_segment=segment_runner("implicit", "fixed", _kernel), stiff=True)
+    run_segment=segment_runner("implicit", "fixed", _kernel, scaled=True), stiff=True)
