@@ -51,3 +51,26 @@ def run():
 
 def json_lines(text: str) -> list[dict]:
     return [json.loads(line) for line in text.splitlines() if line.strip()]
+
+
+# --- dynamics test helpers (integrator and splitting tests) ------------------------------------
+def body(moments=(1.0, 2.0, 3.0), mass=2.0):
+    """A body whose principal axes are its body axes (principal frame = body frame, COM origin)."""
+    from massprops.dynamics.model import RigidBody
+
+    return RigidBody(float(mass), np.array(moments, float), np.eye(3), np.zeros(3), 1.0)
+
+
+def program_for(forces, rigid=None):
+    """The compiled force program of ``forces`` acting on ``rigid`` (default `body()`)."""
+    from massprops.dynamics.forces import compile_forces
+    from massprops.dynamics.model import InitialState, OutputSettings, Scene, TimeSettings
+
+    scene = Scene(rigid or body(), InitialState(), tuple(forces), TimeSettings(1.0),
+                  OutputSettings())
+    return compile_forces(scene)
+
+
+def state(r=(0, 0, 0), v=(0, 0, 0), q=(1, 0, 0, 0), w=(0, 0, 0)) -> np.ndarray:
+    """(13,) [r, v, q principal->world, omega principal]."""
+    return np.concatenate([r, v, q, w]).astype(np.float64)

@@ -8,22 +8,18 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from conftest import body, program_for, state
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from massprops.dynamics.forces import compile_forces, energy
+from massprops.dynamics.forces import energy
 from massprops.dynamics.integrators import INTEGRATORS, IntegratorSpec, radau, register
 from massprops.dynamics.integrators import _dop853_tableau as dop
 from massprops.dynamics.integrators.base import KINDS, NJEV, STATUS, STEPS
 from massprops.dynamics.model import (
     Gravity,
-    InitialState,
-    OutputSettings,
     PointForce,
-    RigidBody,
-    Scene,
     Spring,
-    TimeSettings,
     Torque,
 )
 from massprops.errors import UsageError
@@ -38,20 +34,6 @@ COARSE = 0.1
 
 
 # --- helpers: scenes, states and a segment walker like the simulate module's -------------------
-def body(moments=(1.0, 2.0, 3.0), mass=2.0) -> RigidBody:
-    """A body whose principal axes are its body axes (principal frame = body frame, COM origin)."""
-    return RigidBody(float(mass), np.array(moments, float), np.eye(3), np.zeros(3), 1.0)
-
-
-def program_for(forces, rigid=None):
-    scene = Scene(rigid or body(), InitialState(), tuple(forces), TimeSettings(1.0),
-                  OutputSettings())
-    return compile_forces(scene)
-
-
-def state(r=(0, 0, 0), v=(0, 0, 0), q=(1, 0, 0, 0), w=(0, 0, 0)) -> np.ndarray:
-    """(13,) [r, v, q principal->world, omega principal]."""
-    return np.concatenate([r, v, q, w]).astype(np.float64)
 
 
 @dataclass

@@ -13,11 +13,12 @@ import math
 
 import numpy as np
 import pytest
+from conftest import body, program_for, state
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.linalg import expm
 
-from massprops.dynamics.forces import compile_forces, energy
+from massprops.dynamics.forces import energy
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.integrators._subflows import drift_work, kick_program, kick_work
 from massprops.dynamics.integrators.base import STATUS, STEPS
@@ -30,13 +31,8 @@ from massprops.dynamics.integrators.splitting import (
 from massprops.dynamics.model import (
     Drag,
     Gravity,
-    InitialState,
-    OutputSettings,
     PointForce,
-    RigidBody,
-    Scene,
     Spring,
-    TimeSettings,
     Torque,
 )
 from massprops.errors import UsageError
@@ -47,20 +43,6 @@ METHODS = {"splitting": (STRANG, 2), "splitting4": (MCLACHLAN_S5_ORDER4, 4),
 
 
 # --- helpers -----------------------------------------------------------------------------------
-def body(moments=(1.0, 2.0, 3.0), mass=2.0) -> RigidBody:
-    """A body whose principal frame is its body frame (COM at the origin)."""
-    return RigidBody(float(mass), np.array(moments, float), np.eye(3), np.zeros(3), 1.0)
-
-
-def program_for(forces, rigid=None):
-    scene = Scene(rigid or body(), InitialState(), tuple(forces), TimeSettings(1.0),
-                  OutputSettings())
-    return compile_forces(scene)
-
-
-def state(r=(0, 0, 0), v=(0, 0, 0), q=(1, 0, 0, 0), w=(0, 0, 0)) -> np.ndarray:
-    """(13,) [r, v, q principal->world, omega principal]."""
-    return np.concatenate([r, v, q, w]).astype(np.float64)
 
 
 def quat_axis_angle(axis, angle) -> np.ndarray:
