@@ -11,7 +11,6 @@ from __future__ import annotations
 import contextlib
 import io
 import os
-import tempfile
 import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -154,6 +153,8 @@ def _local_path(source: Source, extension: str) -> Iterator[str]:
         yield str(source.path)
         return
     data = source.read_bytes()
+    import tempfile  # only a stream read through meshio/trimesh needs it: not at start-up
+
     fd, tmp = tempfile.mkstemp(suffix=extension, prefix="massprops-")
     try:
         with os.fdopen(fd, "wb") as f:
