@@ -16,7 +16,9 @@ import click
 from massprops import __version__
 from massprops.errors import MassPropsError, UsageError, exit_code
 
-UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")  # same keys as massprops.io.UNITS (tested)
+UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")
+"""The keys of massprops.io.UNITS, written out so that building the CLI does not import the
+readers (tests/test_cli.py checks the two agree)."""
 
 
 def _say_error(message: str) -> None:
@@ -44,9 +46,10 @@ def _guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
             raise
         if isinstance(exc, OSError):
             _say_error(f"{exc.filename or ''}: {exc.strerror or exc}".lstrip(": "))
-            return 1
-        _say_error(f"internal error: {type(exc).__name__}: {exc} (run with --debug for details)")
-        return 3
+        else:
+            _say_error(f"internal error: {type(exc).__name__}: {exc} "
+                       "(run with --debug for details)")
+        return exit_code(exc)
 
 
 def _emit_json(obj: dict) -> None:

@@ -87,4 +87,6 @@ def exit_code(exc: BaseException) -> int:
     for cls, code in EXIT_CODES.items():
         if isinstance(exc, cls):
             return code
-    return 1
+    if isinstance(exc, OSError):  # the environment failed an input or output (disk full, ...)
+        return 1
+    return 3  # anything else is a failure of the computation itself (a bug)

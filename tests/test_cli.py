@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 from conftest import CUBE_QUADS, SAMPLES, box_vf, json_lines, rot_z, vf_text
 
+from massprops.errors import DivergenceError, MeshFormatError, UsageError, exit_code
+
 # The notes' cuboid (slide 14), from its definition: 3×2×2, turned 30° about z.
 R30 = rot_z(30.0)
 CUBOID_J = R30 @ np.diag([8.0, 13.0, 13.0]) @ R30.T
@@ -220,3 +222,22 @@ def test_real_process_entry_points(tmp_path):
                            text=True)
     assert usage.returncode == 2
     assert subprocess.run(cmd + ["--help"], capture_output=True).returncode == 0
+
+
+def test_unit_choices_are_the_readers_units():
+    from massprops.cli import UNIT_CHOICES
+    from massprops.io import UNITS
+
+    assert set(UNIT_CHOICES) == set(UNITS)
+
+
+@pytest.mark.parametrize("exc,code", [
+    (MeshFormatError("x"), 1),
+    (UsageError("x"), 2),
+    (DivergenceError("x"), 3),
+    (PermissionError(13, "denied", "out.obj"), 1),
+    (ZeroDivisionError("bug"), 3),
+    (KeyboardInterrupt(), 130),
+], ids=["input", "usage", "computation", "os-error", "bug", "interrupt"])
+def test_exit_code_table(exc, code):
+    assert exit_code(exc) == code
