@@ -4,11 +4,10 @@ conditions, observed convergence order, conservation laws, stability theory for 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from conftest import body, program_for, state
+from conftest import body, integrate, program_for, quat_axis_angle, rotation_matrices, state
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -34,51 +33,6 @@ COARSE = 0.1
 
 
 # --- helpers: scenes, states and a segment walker like the simulate module's -------------------
-
-
-@dataclass
-class Run:
-    y: np.ndarray  # final state
-    y_out: np.ndarray  # (n_out, ny) dense output
-    stats: np.ndarray
-    err: float
-    t_reached: float
-
-
-def integrate(name, program, y0, duration, setting, t_out=(), rot_only=False) -> Run:
-    """Walk [0, duration] segment by segment, split at the force windows' edges."""
-    spec = INTEGRATORS[name]
-    t_out = np.asarray(t_out, dtype=np.float64)
-    y = y0.copy()
-    y_out = np.full((t_out.size, y.size), np.nan)
-    stats = np.zeros(5, dtype=np.int64)
-    edges = [0.0, *program.breakpoints(0.0, duration).tolist(), duration]
-    err, t_reached = 0.0, 0.0
-    for t0, t1 in zip(edges[:-1], edges[1:]):
-        sel = np.flatnonzero(((t_out >= t0) if t0 == 0 else (t_out > t0)) & (t_out <= t1))
-        ys = np.empty((sel.size, y.size))
-        arrays = (program.active(0.5 * (t0 + t1)), program.codes, program.params, program.mass,
-                  program.inertia)
-        e, t_reached = spec.run_segment(y, t0, t1, setting, arrays, rot_only, t_out[sel], ys,
-                                        stats)
-        y_out[sel] = ys
-        err += e
-        if stats[STATUS] or t_reached < t1:
-            break
-    return Run(y, y_out, stats, err, t_reached)
-
-
-def quat_axis_angle(axis, angle) -> np.ndarray:
-    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * np.asarray(axis, float)])
-
-
-def rotation_matrices(q: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) from (n, 4) unit quaternions [w, x, y, z] (textbook formula, written here)."""
-    w, x, y, z = q.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
 
 
 def same_rotation_error(q, q_exact) -> np.ndarray:

@@ -9,11 +9,9 @@ a free body over 1e6 steps, the energy of conservative scenes over long runs); t
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
-from conftest import body, program_for, state
+from conftest import body, integrate, program_for, quat_axis_angle, rotation_matrices, state
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.linalg import expm
@@ -45,20 +43,6 @@ METHODS = {"splitting": (STRANG, 2), "splitting4": (MCLACHLAN_S5_ORDER4, 4),
 # --- helpers -----------------------------------------------------------------------------------
 
 
-def quat_axis_angle(axis, angle) -> np.ndarray:
-    axis = np.asarray(axis, float) / np.linalg.norm(axis)
-    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis])
-
-
-def rotation_matrices(q: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) from (n, 4) unit quaternions [w, x, y, z] (textbook formula, written here)."""
-    w, x, y, z = q.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
-
-
 def rotation_angle_error(q, q_ref) -> float:
     """Largest angle (rad) between the rotations of two (n, 4) quaternion arrays."""
     dots = np.abs(np.einsum("ij,ij->i", np.atleast_2d(q), np.atleast_2d(q_ref)))
@@ -69,30 +53,6 @@ def world_momentum(moments, y_out) -> np.ndarray:
     """(n, 3) angular momentum in world, A(q) J' ω', from full-layout rows."""
     return np.einsum("nij,nj->ni", rotation_matrices(y_out[:, 6:10]),
                      np.asarray(moments) * y_out[:, 10:13])
-
-
-def integrate(name, program, y0, duration, setting, t_out=(), rot_only=False):
-    """Walk [0, duration] segment by segment, split at the force windows' edges, as simulate
-    does. Returns (final y, y_out, stats, summed err)."""
-    spec = INTEGRATORS[name]
-    t_out = np.asarray(t_out, dtype=np.float64)
-    y = y0.copy()
-    y_out = np.full((t_out.size, y.size), np.nan)
-    stats = np.zeros(5, dtype=np.int64)
-    edges = [0.0, *program.breakpoints(0.0, duration).tolist(), duration]
-    err = 0.0
-    for t0, t1 in zip(edges[:-1], edges[1:]):
-        sel = np.flatnonzero(((t_out >= t0) if t0 == 0 else (t_out > t0)) & (t_out <= t1))
-        ys = np.empty((sel.size, y.size))
-        arrays = (program.active(0.5 * (t0 + t1)), program.codes, program.params, program.mass,
-                  program.inertia)
-        e, t_reached = spec.run_segment(y, t0, t1, setting, arrays, rot_only, t_out[sel], ys,
-                                        stats)
-        y_out[sel] = ys
-        err += e
-        if stats[STATUS] or t_reached < t1:
-            break
-    return y, y_out, stats, err
 
 
 # --- the composition coefficients ---------------------------------------------------------------
@@ -162,7 +122,7 @@ def references():
     out = {}
     for damped in (False, True):
         program, y0 = torqued_problem(damped)
-        y, y_out, stats, _ = integrate("dop853", program, y0, ORDER_DURATION, 1e-14, OFF_STEP)
+        y, y_out, stats, _, _ = integrate("dop853", program, y0, ORDER_DURATION, 1e-14, OFF_STEP)
         assert stats[STATUS] == 0
         out[damped] = (y, y_out)
     return out
@@ -182,7 +142,7 @@ def test_observed_order_at_steps_and_in_dense_output(name, damped, references):
     h = ORDER_STEPS[name]
     end, dense = [], []
     for i in range(3):
-        y, y_out, stats, _ = integrate(name, program, y0, ORDER_DURATION, h / 2 ** i, OFF_STEP)
+        y, y_out, stats, _, _ = integrate(name, program, y0, ORDER_DURATION, h / 2 ** i, OFF_STEP)
         assert stats[STATUS] == 0
         end.append(np.abs(y - ref_y).max())
         dense.append(np.abs(y_out - ref_out).max())
@@ -195,7 +155,7 @@ def test_observed_order_at_steps_and_in_dense_output(name, damped, references):
                                     ("splitting6", 0.1)], ids=list(METHODS))
 def test_error_estimate_has_the_size_of_the_true_error(name, h, references):
     program, y0 = torqued_problem(False)
-    y, _, _, err = integrate(name, program, y0, ORDER_DURATION, h)
+    y, _, _, err, _ = integrate(name, program, y0, ORDER_DURATION, h)
     true = np.abs(y - references[False][0]).max()
     assert true / 3 < err < 30 * true
 
@@ -212,7 +172,7 @@ def test_uniform_acceleration_is_exact(name, kind):
     """r = r0 + v0 t + a t²/2 whatever the step: kicks and drifts are exact flows here."""
     forces, acc = UNIFORM[kind]
     r0, v0 = np.array([0.5, -1.0, 2.0]), np.array([1.0, 2.0, 3.0])
-    y, y_out, _, _ = integrate(name, program_for(forces), state(r0, v0, w=(0.3, -0.2, 0.5)),
+    y, y_out, _, _, _ = integrate(name, program_for(forces), state(r0, v0, w=(0.3, -0.2, 0.5)),
                                2.95, 0.1, COARSE_TIMES)
     t = COARSE_TIMES[:, None]
     np.testing.assert_allclose(y_out[:, 0:3], r0 + v0 * t + 0.5 * acc * t * t, atol=1e-12)
@@ -231,7 +191,7 @@ def test_constant_torque_about_a_principal_axis_is_exact(name, axis, rot_only):
     vector[axis] = tau
     program = program_for([Torque(vector, frame="body")])
     y0 = state()[6:] if rot_only else state()
-    _, y_out, _, _ = integrate(name, program, y0, 2.95, 0.1, COARSE_TIMES, rot_only=rot_only)
+    _, y_out, _, _, _ = integrate(name, program, y0, 2.95, 0.1, COARSE_TIMES, rot_only=rot_only)
     o = 0 if rot_only else 6
     t = COARSE_TIMES
     w_exact = np.zeros((t.size, 3))
@@ -249,7 +209,7 @@ def test_a_million_torque_free_steps_keep_the_invariants_at_round_off():
     t_out = np.linspace(0.0, 1000.0, 11) + 0.00037  # between steps: partial steps
     t_out[0], t_out[-1] = 0.0, 1000.0
     y0 = state(q=quat_axis_angle([0.6, 0, 0.8], 0.7), w=(0.5, 1.2, -0.7))
-    _, y_out, stats, _ = integrate("splitting", program, y0, 1000.0, 1e-3, t_out)
+    _, y_out, stats, _, _ = integrate("splitting", program, y0, 1000.0, 1e-3, t_out)
     assert stats[STEPS] == 1_000_000 and stats[STATUS] == 0
     h_world = world_momentum(program.inertia, y_out)
     assert np.abs(h_world - h_world[0]).max() < 2e-11 * np.linalg.norm(h_world[0])
@@ -268,7 +228,7 @@ def test_compositions_with_backward_substeps_keep_a_free_rotation(name):
     r0, v0 = np.array([0.3, 0.0, 1.0]), np.array([1.0, -0.5, 4.0])
     y0 = state(r0, v0, quat_axis_angle([1, 2, 3], 0.3), (0.9, -0.4, 0.6))
     t_out = np.array([0.0, 50.0])
-    y, y_out, stats, _ = integrate(name, program, y0, 50.0, 1e-3, t_out)
+    y, y_out, stats, _, _ = integrate(name, program, y0, 50.0, 1e-3, t_out)
     assert stats[STATUS] == 0
     h_world = world_momentum(program.inertia, y_out)
     assert np.linalg.norm(h_world[1] - h_world[0]) < 1e-11 * np.linalg.norm(h_world[0])
@@ -284,7 +244,7 @@ def test_any_free_rotation_keeps_energy_and_momentum(moments, w, h):
     if moments[2] > moments[0] + moments[1]:  # not a rigid body (triangle inequality)
         return
     program = program_for([], body(moments))
-    _, y_out, _, _ = integrate("splitting", program, state(w=w), 20 * h, h,
+    _, y_out, _, _, _ = integrate("splitting", program, state(w=w), 20 * h, h,
                                np.array([0.0, 20 * h]))
     h_world = world_momentum(program.inertia, y_out)
     assert np.linalg.norm(h_world[1] - h_world[0]) < 1e-13 * np.linalg.norm(h_world[0])
@@ -325,7 +285,7 @@ def energy_error_windows(name, step=0.02, duration=1000.0):
     program, y0 = conservative_scene()
     t_out = np.arange(0.0, duration + 0.5, 0.5) + 0.0037
     t_out[0], t_out[-1] = 0.0, duration
-    _, y_out, stats, _ = integrate(name, program, y0, duration, step, t_out)
+    _, y_out, stats, _, _ = integrate(name, program, y0, duration, step, t_out)
     assert stats[STATUS] == 0
     e = energy(y_out, program)
     de = np.abs(e - e[0])
@@ -370,17 +330,17 @@ def test_fast_spin_at_a_coarse_step(kind):
     a radian after 1 s (it needs h ~ 1e-5); the splitting, whose drift is exact, is accurate to
     ~1e-6 and stays bounded over 10 s (energy)."""
     program, y0 = fast_spin_scene(kind)
-    ref, _, stats, _ = integrate("dop853", program, y0, 1.0, 1e-13)
+    ref, _, stats, _, _ = integrate("dop853", program, y0, 1.0, 1e-13)
     assert stats[STATUS] == 0
-    rk4, _, stats_rk4, _ = integrate("rk4", program, y0, 1.0, 1e-3)
+    rk4, _, stats_rk4, _, _ = integrate("rk4", program, y0, 1.0, 1e-3)
     assert stats_rk4[STATUS] == 1 or rotation_angle_error(rk4[6:10], ref[6:10]) > 0.05
-    y, _, stats, _ = integrate("splitting", program, y0, 1.0, 1e-3)
+    y, _, stats, _, _ = integrate("splitting", program, y0, 1.0, 1e-3)
     assert stats[STATUS] == 0
     assert rotation_angle_error(y[6:10], ref[6:10]) < 1e-5
     assert np.abs(y[10:13] - ref[10:13]).max() < 1e-6 * np.linalg.norm(ref[10:13])
     assert np.abs(y[0:6] - ref[0:6]).max() < 1e-3
     t_out = np.linspace(0.0, 10.0, 101)
-    _, y_out, stats, _ = integrate("splitting", program, y0, 10.0, 1e-3, t_out)
+    _, y_out, stats, _, _ = integrate("splitting", program, y0, 10.0, 1e-3, t_out)
     e = energy(y_out, program)
     assert stats[STATUS] == 0 and np.abs(e / e[0] - 1).max() < 1e-4
 
@@ -392,11 +352,11 @@ def test_strong_drag_decays_at_any_step():
     program = program_for([Drag(2e4, 3e4)], body(mass=2.0))
     y0 = state(v=(1.0, -2.0, 0.5), w=(0.5, 1.0, -0.3))
     t_out = np.linspace(0.0, 1.0, 101)
-    _, y_out, stats, _ = integrate("splitting", program, y0, 1.0, 1e-2, t_out)
+    _, y_out, stats, _, _ = integrate("splitting", program, y0, 1.0, 1e-2, t_out)
     assert stats[STATUS] == 0 and np.isfinite(y_out).all()
     speed = np.linalg.norm(y_out[:, 3:6], axis=1)
     assert np.all(np.diff(speed) <= 0) and speed[-1] < speed[0]
-    _, _, stats_rk4, _ = integrate("rk4", program, y0, 1.0, 1e-2)
+    _, _, stats_rk4, _, _ = integrate("rk4", program, y0, 1.0, 1e-2)
     assert stats_rk4[STATUS] == 1
 
 
@@ -409,7 +369,7 @@ def test_drag_matches_its_closed_form(name, tol):
     program = program_for([Drag(c, c_ang)], body(moments, mass))
     v0, w0 = np.array([1.0, -2.0, 0.5]), 1.5
     t = np.array([0.0, 0.7137, 2.0])
-    _, y_out, stats, _ = integrate(name, program, state(v=v0, w=(0.0, w0, 0.0)), 2.0, 0.01, t)
+    _, y_out, stats, _, _ = integrate(name, program, state(v=v0, w=(0.0, w0, 0.0)), 2.0, 0.01, t)
     decay_v, decay_w = np.exp(-c * t / mass), np.exp(-c_ang * t / moments[1])
     np.testing.assert_allclose(y_out[:, 3:6], v0 * decay_v[:, None], atol=tol)
     np.testing.assert_allclose(y_out[:, 0:3], v0 * (mass / c) * (1 - decay_v)[:, None],
