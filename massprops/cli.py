@@ -6,6 +6,7 @@ a small mesh pays for numpy and the mesh code only (no rich, scipy, trimesh or n
 
 from __future__ import annotations
 
+import gc
 import json
 import sys
 from collections.abc import Callable, Iterable
@@ -244,6 +245,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
     interrupted = []
 
     def run() -> None:
+        from massprops.dynamics._jit import start_numba_lean
         from massprops.dynamics.scene import load_scene
         from massprops.dynamics.simulate import simulate as run_scene
         from massprops.errors import DivergenceError
@@ -261,6 +263,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             sampling = scene.time.duration / 1000
         protect = [scene_path, *scene.input_files]
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+        start_numba_lean()
         try:
             result = run_scene(scene, integrator=integrator, rtol=rtol, step=step,
                                every=sampling, progress=progress)
@@ -305,6 +308,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
     measured against the exact solution or a much tighter, checked reference run."""
 
     def run() -> None:
+        from massprops.dynamics._jit import start_numba_lean
         from massprops.dynamics.precision import precision as run_ladders
         from massprops.dynamics.scene import load_scene
 
@@ -314,6 +318,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
             require_matplotlib()
         scene = load_scene(scene_path)
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+        start_numba_lean()
         try:
             report = run_ladders(scene, integrators=[i for i in integrators if i != "auto"],
                                  progress=progress)
@@ -370,4 +375,9 @@ def main(argv: list[str] | None = None) -> None:
     except UsageError as exc:
         _say_error(str(exc))
         sys.exit(2)
+    # The process ends here: freeze what the command left (after simulate, numba's ~10^6
+    # typing and compiled-code objects) so the interpreter's teardown does not collect them one
+    # cycle at a time: ~0.25 s of a ~0.7 s simulate, ~0.03 s frozen. Files are closed already
+    # and stdout is still flushed at exit; the OS takes the memory back.
+    gc.freeze()
     sys.exit(code if isinstance(code, int) else 0)

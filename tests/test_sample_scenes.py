@@ -546,10 +546,11 @@ def test_error_estimates_are_honest_over_the_suite(monkeypatch):
         cells.setdefault(f"{name}/{run.integrator}", []).append(bool(ratio > 10))
     worst = sorted(cells.items(), key=lambda kv: -sum(kv[1]))
     summary = ", ".join(f"{cell} {sum(bad)}/{len(bad)}" for cell, bad in worst if any(bad))
-    # The bar is 95 % overall; measured 87 % (dop853 and splitting 100 %; the
-    # fixed-step Richardson estimate still misses round-off amplification near the separatrix
-    # and Radau's Newton floor: see the session note). These guard the measured levels.
-    dop = np.array([r for (_, run), r in zip(rungs, ratios) if run.integrator == "dop853"])
-    assert np.mean(dop <= 10) >= 0.95, summary
-    assert np.mean(ratios <= 10) >= 0.85, f"dishonest rungs (true > 10 x estimate): {summary}"
+    # The bar, overall and for every integrator with enough rungs to say (measured over
+    # all sample scenes: 98.9 % overall, each integrator >= 93 %; what is left is round-off
+    # amplified near the separatrix, where three runs of a noise cannot always tell its size).
+    assert np.mean(ratios <= 10) >= 0.95, f"dishonest rungs (true > 10 x estimate): {summary}"
+    for name in {run.integrator for _, run in rungs}:
+        mine = np.array([r for (_, run), r in zip(rungs, ratios) if run.integrator == name])
+        assert mine.size < 20 or np.mean(mine <= 10) >= 0.9, summary
     assert 0.1 <= 1.0 / np.median(ratios) <= 10

@@ -10,12 +10,18 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from massprops.dynamics.accuracy import Scales, companion, exact_roundoff, state_error
+from massprops.dynamics.accuracy import (
+    Scales,
+    companion_settings,
+    exact_roundoff,
+    global_estimate,
+    state_error,
+)
 from massprops.dynamics.forces import (
     DRAG,
     FORCE_BODY,
@@ -28,7 +34,9 @@ from massprops.dynamics.forces import (
     energy,
 )
 from massprops.dynamics.model import Scene
+from massprops.dynamics.stiffness import unresolved, unresolved_mode_error
 from massprops.errors import DivergenceError, UsageError
+from massprops.parallel import CancellableJob
 from massprops.rotation import canonical, matrix_to_quat, quat_multiply, quat_to_matrix
 
 STEP_BUDGET = 2_000_000
@@ -123,7 +131,8 @@ def to_world(scene: Scene, t: np.ndarray, y: np.ndarray, program: ForceProgram,
 
 
 # --- choosing a method -------------------------------------------------------------------------
-def choose_integrator(scene: Scene, program: ForceProgram, available: dict) -> tuple[str, str]:
+def choose_integrator(scene: Scene, program: ForceProgram, available: Mapping
+                      ) -> tuple[str, str]:
     """(name, reason) for ``time.integrator: auto``."""
     if not program.has_torque and program.translation_closed_form and "exact" in available:
         return "exact", "torque-free with constant force: closed-form solution, no time stepping"
@@ -170,8 +179,10 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
              progress: Callable[[float], None] | None = None) -> SimulationResult:
     """Integrate ``scene``; options override the scene's time/output settings.
 
-    progress(fraction) is called between compiled chunks. Ctrl-C during the run returns the
-    samples computed so far with ``interrupted=True`` (the caller exits 130).
+    progress(fraction) is called between compiled chunks of the main run, and while waiting for
+    the error estimate's companion runs (on a helper thread, see `_start_companions`), always on
+    the calling thread. Ctrl-C during the run returns the samples computed so far with
+    ``interrupted=True`` (the caller exits 130).
     Raises DivergenceError (exit 3) naming the time and the likely cause.
     """
     from massprops.dynamics.integrators import INTEGRATORS
@@ -193,7 +204,25 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     duration = scene.time.duration
     t_out = sample_times(duration, every if every is not None else scene.output.every)
     setting = _setting(spec, scene, program, rtol, step)
-    main_progress = None if progress is None else (lambda f: progress(0.5 * f))
+    side = _start_companions(scene, program, spec, setting, t_out)
+    wait = True
+    try:
+        return _run_and_check(scene, program, spec, name, reason, setting, t_out, progress, side)
+    except KeyboardInterrupt:  # Ctrl-C while the kernel compiles or loads, before the run's
+        wait = False  # chunks: leave now; the helper stops at its first report (a compile later)
+        raise
+    finally:  # a main run that failed or was interrupted no longer needs its companions
+        if side is not None and wait:
+            side.stop()
+        elif side is not None:
+            side.cancel()
+
+
+def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
+                   side: CancellableJob | None) -> SimulationResult:
+    """The main run, its diagnostics and divergence checks, then the error estimate from the
+    companion runs of ``side`` (running meanwhile on another thread; None for closed forms)."""
+    main_progress = None if progress is None else _joint_progress(progress, side)
     run = run_once(scene, program, spec, setting, t_out, main_progress)
     conservative = is_conservative(program)
     traj = to_world(scene, run.t, run.y, program, with_energy=conservative
@@ -214,10 +243,58 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     if run.failure is not None:
         raise DivergenceError(f"{scene.source}: {run.failure}", partial=result)
     if not run.interrupted:
-        late = None if progress is None else (lambda f: progress(0.5 + 0.5 * f))
-        diagnostics["error_estimate"] = _error_estimate(scene, program, spec, setting, t_out,
-                                                        traj, late, run.short_err)
+        others = None if side is None else _companion_runs(side, progress)
+        diagnostics["error_estimate"] = _error_estimate(scene, program, spec, setting, traj,
+                                                        others, run.short_err)
     return result
+
+
+# --- the error-estimate companions, beside the main run -----------------------------------------
+def _start_companions(scene: Scene, program: ForceProgram, spec, setting: float,
+                      t_out: np.ndarray) -> CancellableJob | None:
+    """The companion runs of the error estimate (accuracy.companion_settings), one after the
+    other on a helper thread, or None for a method that needs none. They run while the main run
+    does: the kernels release the GIL (_jit.kernel), so on two cores the estimate adds little
+    wall time to the main run (a fixed step's 2h and 4h companions cost 3/4 of it, dop853's at
+    rtol / 20 ~1.45 times). Every run is deterministic in its own arrays: the numbers are
+    bit-identical to running them all one after the other."""
+    settings = companion_settings(spec.kind, setting)
+    if not settings:
+        return None
+
+    def companions(report: Callable[[float], None]) -> list[RawRun]:
+        runs: list[RawRun] = []
+        for k, other in enumerate(settings):
+            def part(fraction: float, k: int = k) -> None:  # of all companions together
+                report((k + fraction) / len(settings))
+
+            runs.append(run_once(scene, program, spec, other, t_out, part))
+            if runs[-1].interrupted or runs[-1].failure is not None:
+                break  # the next companion could add nothing
+        return runs
+
+    return CancellableJob(companions)
+
+
+def _joint_progress(progress: Callable[[float], None], side: CancellableJob | None
+                    ) -> Callable[[float], None]:
+    """The main run's progress callback: the mean of the main run's and the companions'
+    fractions (called on this thread only, between the main run's chunks)."""
+    if side is None:
+        return progress
+    return lambda fraction: progress(0.5 * fraction + 0.5 * side.fraction)
+
+
+def _companion_runs(side: CancellableJob, progress: Callable[[float], None] | None
+                    ) -> list[RawRun] | None:
+    """Wait for the companions (moving the progress bar meanwhile); None when they cannot give
+    an estimate: Ctrl-C while waiting (as when they ran after the main run), or a setting the
+    method refuses (dop853 at rtol / 20 below round-off): the main run's result stands."""
+    poll = None if progress is None else (lambda: progress(0.5 + 0.5 * side.fraction))
+    try:
+        return side.result(poll)
+    except (KeyboardInterrupt, UsageError):
+        return None
 
 
 def scale_floors(scene: Scene) -> np.ndarray:
@@ -258,26 +335,32 @@ def run_once(scene: Scene, program: ForceProgram, spec, setting: float, t_out: n
                   interrupted, runner.short_err)
 
 
-def _error_estimate(scene, program, spec, setting, t_out, traj, progress,
+def _error_estimate(scene, program, spec, setting, traj, others: list[RawRun] | None,
                     short_err: float = 0.0) -> float | None:
-    """Global error estimate in the contract's metric (see massprops.dynamics.accuracy); None
-    when it cannot be had (interrupted, or the companion run diverged). ``short_err`` (see
-    RawRun) is added in the metric's units, conservatively: its component is unknown, so it is
-    divided by the smallest scale (a quaternion error δ is an angle of about 2δ)."""
+    """Global error estimate in the contract's metric (see massprops.dynamics.accuracy) from the
+    companion runs ``others`` (in accuracy.companion_settings order); None when it cannot be had
+    (interrupted, missing, or the first companion diverged). ``short_err`` (see RawRun) is added
+    in the metric's units, conservatively: its component is unknown, so it is divided by the
+    smallest scale (a quaternion error δ is an angle of about 2δ)."""
     scales = Scales.of(scene.body.size, traj, scene.time.duration)
-    plan = companion(spec.kind, spec.order, setting)
-    if plan is None:
+    if not companion_settings(spec.kind, setting):
         return exact_roundoff(traj, scales)
-    other_setting, factor = plan
-    other = run_once(scene, program, spec, other_setting, t_out, progress)
-    if other.interrupted:
+    if not others or others[0].interrupted:
         return None
-    if other.failure is not None:  # the 2h companion diverged: h is near the stability limit and
-        return None  # the error cannot be estimated this way: reported as unknown (null)
-    other_traj = to_world(scene, other.t, other.y, program, with_energy=False)
+    if others[0].failure is not None:  # the 2h companion diverged: h is near the stability limit
+        return None  # and the error cannot be estimated this way: reported as unknown (null)
+    first = to_world(scene, others[0].t, others[0].y, program, with_energy=False)
+    d_companions = None  # no second companion, or it diverged (4h beyond the stability limit)
+    if len(others) > 1 and not others[1].interrupted and others[1].failure is None:
+        second = to_world(scene, others[1].t, others[1].y, program, with_energy=False)
+        d_companions = state_error(first, second, scales)
     blind = short_err * max(1 / scales.size, 1 / scales.velocity, 2.0,
                             1 / scales.angular_velocity)
-    return state_error(traj, other_traj, scales) * factor + blind
+    estimate = global_estimate(spec.kind, spec.order, state_error(traj, first, scales),
+                               d_companions) + blind
+    if unresolved(spec, setting, program):  # a mode all three runs fail alike: measured apart
+        estimate = max(estimate, unresolved_mode_error(scene, program, spec, setting, scales))
+    return estimate
 
 
 def _setting(spec, scene: Scene, program: ForceProgram, rtol: float | None,

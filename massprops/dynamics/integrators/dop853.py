@@ -27,6 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
+from massprops.dynamics._jit import kernel
 from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, D
 from massprops.dynamics.integrators._shared import (
     all_finite,
@@ -157,7 +158,7 @@ def _dense_row(cont, s, out, o):
     project_quaternion(out, o)
 
 
-@njit(cache=True)
+@kernel
 def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_out, y_out,
             stats, floors):
     prog = (active, codes, params, mass, inertia, rot_only)

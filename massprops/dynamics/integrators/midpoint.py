@@ -26,6 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
+from massprops.dynamics._jit import kernel
 from massprops.dynamics.integrators._newton import (
     CONVERGED,
     DIVERGED,
@@ -145,7 +146,7 @@ def _richardson(y, h, y_full, jac, prog, lu, piv, g, tmp, fz, blk, scales, trial
     return 4.0 / 3.0 * d, nfev
 
 
-@njit(cache=True)
+@kernel
 def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_out, y_out,
             stats, floors):
     prog = (active, codes, params, mass, inertia, rot_only)

@@ -33,6 +33,7 @@ import math
 import numpy as np
 from numba import njit
 
+from massprops.dynamics._jit import kernel
 from massprops.dynamics.integrators._newton import (
     CONVERGED,
     DIVERGED,
@@ -236,7 +237,7 @@ def _emit(y, z, t, h, t_next, ynew, qpoly, t_out, y_out, k, o):
     return k
 
 
-@njit(cache=True)
+@kernel
 def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_out, y_out,
             stats, floors):
     prog = (active, codes, params, mass, inertia, rot_only)

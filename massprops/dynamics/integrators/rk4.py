@@ -14,6 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
+from massprops.dynamics._jit import kernel
 from massprops.dynamics.integrators._shared import (
     all_finite,
     emit_hermite,
@@ -69,7 +70,7 @@ def _richardson(y, fy, h, y_full, prog, k2, k3, k4, tmp, mid, fmid, end):
     return 16.0 / 15.0 * d
 
 
-@njit(cache=True)
+@kernel
 def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_out, y_out,
             stats):
     prog = (active, codes, params, mass, inertia, rot_only)

@@ -50,6 +50,7 @@ import math
 import numpy as np
 from numba import njit
 
+from massprops.dynamics._jit import kernel
 from massprops.dynamics.integrators._shared import (
     all_finite,
     emit_start,
@@ -156,7 +157,7 @@ def _richardson(y_a, y_b, h, gam, order, kp, wk, dw, part):
     return gain / (gain - 1.0) * d, nfev
 
 
-@njit(cache=True)
+@kernel
 def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_out, y_out,
             stats, gam, order):
     n = y.shape[0]
