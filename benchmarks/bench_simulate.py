@@ -9,10 +9,11 @@
     compile in a fresh process with an empty numba cache.
 (b) Whole processes: a fast-spinning torqued body with drag over 1000 s, where scipy's DOP853
     needs ~4e5 evaluations. ``python -m massprops simulate scene.yaml --json --quiet`` (its
-    scene rtol; the process also runs its error-estimate companion at rtol/20 (on the second core), as every simulate
-    does) against ``python _scipy_process.py`` (numpy + scipy only) running solve_ivp DOP853 at
-    the rtol whose final error matches ours (tuned in process first; the errors of both processes
-    are then checked). Best of --repeat-process. Target: scipy / massprops >= 10.
+    scene rtol; the process also runs its error-estimate companion at rtol/20 on the second
+    core, as every simulate does) against ``python _scipy_process.py`` (numpy + scipy only)
+    running solve_ivp DOP853 at the rtol whose final error matches ours (tuned in process first;
+    the errors of both processes are then checked). Best of --repeat-process.
+    Target: scipy / massprops >= 10.
 
 Error: ``massprops.dynamics.accuracy.state_error`` (the contract's metric) at the final time,
 against ``precision.reference_run`` (dop853 at rtol 1e-13, checked against 1e-12). scipy's atol is

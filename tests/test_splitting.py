@@ -202,7 +202,8 @@ def test_constant_torque_about_a_principal_axis_is_exact(name, axis, rot_only):
     assert rotation_angle_error(y_out[:, o:o + 4], q_exact) < 1e-7  # arccos: ~sqrt(eps)
 
 
-@pytest.mark.parametrize("moments", [(1.0, 2.0, 3.0), (1.0, 1.0, 3.0)], ids=["asymmetric", "symmetric"])
+@pytest.mark.parametrize("moments", [(1.0, 2.0, 3.0), (1.0, 1.0, 3.0)],
+                         ids=["asymmetric", "symmetric"])
 def test_a_million_torque_free_steps_keep_the_invariants_at_round_off(moments):
     """With no force term a step is the exact free flow: over 1e6 steps (1000 s, ~1300 rad
     turned) |H| and the energy move by round-off only (a random walk of ~1e-16 per step gives
