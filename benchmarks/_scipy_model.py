@@ -5,7 +5,7 @@
 once, nothing interpreted per call; `solve` integrates a scene with solve_ivp. scipy's
 integrators know nothing of the unit quaternion, so NOTHING renormalises q during a scipy run
 (|q| drifts with the truncation error); states are normalised only when turned into the
-contract's frames (simulate.to_world), exactly as massprops' own samples are. Force windows
+contract's frames (frames.to_world), exactly as massprops' own samples are. Force windows
 (start/end) split the run into segments, each integrated by its own solve_ivp call, as massprops
 splits its runs.
 
@@ -23,8 +23,8 @@ from _scipy_rhs import NumpyRhs, cross
 from scipy.integrate import solve_ivp
 
 from massprops.dynamics.forces import compile_forces, rhs
+from massprops.dynamics.frames import initial_principal_state
 from massprops.dynamics.model import Drag, Gravity, PointForce, Scene, Spring, Torque
-from massprops.dynamics.simulate import initial_principal_state
 
 SCIPY_MIN_RTOL = 100 * np.finfo(float).eps
 """solve_ivp raises rtol below this to this (with a warning): ladders stop here."""

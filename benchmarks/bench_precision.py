@@ -42,6 +42,7 @@ from _workprecision_plot import plot_scene
 
 from massprops.dynamics.accuracy import Scales, state_error
 from massprops.dynamics.forces import compile_forces
+from massprops.dynamics.frames import to_world
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.precision import (
     AT_REFERENCE,
@@ -52,7 +53,6 @@ from massprops.dynamics.precision import (
     reference_run,
 )
 from massprops.dynamics.scene import load_scene
-from massprops.dynamics.simulate import to_world
 
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 SCIPY_RTOLS = tuple(10.0**-k for k in range(3, 13))

@@ -1,7 +1,7 @@
 """Speed of `massprops simulate` against scipy's solve_ivp(method="DOP853") at equal final error.
 
 (a) In process: the torqued asymmetric body of bench_precision.py over 100 s. Our dop853
-    (``simulate.run_once``: the compiled run, warm-up apart) against solve_ivp DOP853 on the same
+    (``runner.run_once``: the compiled run, warm-up apart) against solve_ivp DOP853 on the same
     equations (``_scipy_model``, checked against our compiled right-hand side), each at the rtol
     that brings its final error just under 1e-6 and 1e-10 (rtol is tuned by tolerance
     proportionality, a few runs each). Best of --repeat. Target: scipy / massprops >= 20.
@@ -40,10 +40,11 @@ from _scenes import LONG_DRAG, SCENES
 
 from massprops.dynamics.accuracy import ADAPTIVE_TIGHTENING, Scales, state_error
 from massprops.dynamics.forces import compile_forces
+from massprops.dynamics.frames import initial_principal_state, to_world
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.precision import reference_run
+from massprops.dynamics.runner import run_once
 from massprops.dynamics.scene import load_scene
-from massprops.dynamics.simulate import initial_principal_state, run_once, to_world
 
 HERE = Path(__file__).resolve().parent
 TARGETS = (1e-6, 1e-10)
@@ -119,7 +120,7 @@ def cold_compile_seconds(scene_path: Path) -> float:
     code = ("import sys, numpy as np; from massprops.dynamics.scene import load_scene; "
             "from massprops.dynamics.forces import compile_forces; "
             "from massprops.dynamics.integrators import INTEGRATORS; "
-            "from massprops.dynamics.simulate import run_once; "
+            "from massprops.dynamics.runner import run_once; "
             "s = load_scene(sys.argv[1]); "
             "r = run_once(s, compile_forces(s), INTEGRATORS['dop853'], 1e-6, np.array([0.0])); "
             "print(r.warmup)")

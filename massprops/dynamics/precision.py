@@ -17,14 +17,10 @@ import numpy as np
 
 from massprops.dynamics.accuracy import Scales, exact_roundoff, global_estimate, state_error
 from massprops.dynamics.forces import ForceProgram, compile_forces
+from massprops.dynamics.frames import to_world
 from massprops.dynamics.model import Scene
-from massprops.dynamics.simulate import (
-    choose_integrator,
-    default_step,
-    run_once,
-    simulate,
-    to_world,
-)
+from massprops.dynamics.runner import run_once
+from massprops.dynamics.simulate import choose_integrator, default_step, simulate
 from massprops.errors import ComputationError, DivergenceError, UsageError
 
 RTOL_LADDER = tuple(10.0**-k for k in range(3, 13))

@@ -22,7 +22,9 @@ import numpy as np
 
 from massprops.dynamics.accuracy import Scales, state_error
 from massprops.dynamics.forces import ForceProgram
+from massprops.dynamics.frames import to_world
 from massprops.dynamics.model import Scene
+from massprops.dynamics.runner import run_once
 
 PROBE_STEPS = 16
 """Steps of the method inside the window: Radau's |R(hλ)| <= 0.6 for h·λ > 1 leaves < 3e-4."""
@@ -45,8 +47,7 @@ def unresolved_mode_error(scene: Scene, program: ForceProgram, spec, setting: fl
     """The error (contract metric, ``scales``) of ``spec`` at step ``setting`` against a
     resolving dop853 run over the probe window [0, W], W = min(duration, max(PROBE_STEPS·h,
     PROBE_PERIODS·2π/λ)). inf when either run fails there."""
-    from massprops.dynamics.integrators import INTEGRATORS
-    from massprops.dynamics.simulate import run_once, to_world  # simulate calls this module
+    from massprops.dynamics.integrators import INTEGRATORS  # lazy registry: dop853 on demand
 
     rate = program.stiffest_rate
     period = 2 * math.pi / rate

@@ -1,0 +1,196 @@
+"""One compiled run of one method at one setting: the segments between force-window edges, walked
+in chunks (Ctrl-C and the progress bar are served between them), dense samples, failures.
+
+The translation of the centre of mass is closed form when every force is constant in world
+(ForceProgram.translation_closed_form): only [q_p, omega'] is then integrated.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from massprops.dynamics.forces import ForceProgram
+from massprops.dynamics.frames import initial_principal_state
+from massprops.dynamics.model import Scene
+
+CHUNK_STEPS = 50_000
+"""Steps per compiled call (~0.05 s): between calls Ctrl-C and the progress bar are served.
+Chunks are sized by step counts, never by timers, so results do not depend on the machine."""
+
+FIRST_CHUNK = 1 / 32
+"""An adaptive run's first call covers this fraction of the run; later ones grow or shrink
+(at most ×16, at least ×½) toward CHUNK_STEPS steps, from the steps the previous call took."""
+
+
+def scale_floors(scene: Scene) -> np.ndarray:
+    """(4,) smallest error scales of the r, v, q, ω blocks for error-controlled methods: the body
+    size, size/duration, 1, 1/duration (the floors of the contract's metric, accuracy.Scales)."""
+    size, duration = scene.body.size, scene.time.duration
+    return np.array([size, size / duration, 1.0, 1.0 / duration])
+
+
+@dataclass(frozen=True, eq=False)
+class RawRun:
+    """One integration in the principal frame: samples t (n,), y (n, 13) up to where it got,
+    stats [steps, nfev, rejected, njev, status], wall and warm-up seconds, failure message, and
+    short_err: the kernels' own local error estimates (absolute, max-norm over the state) summed
+    over the fixed-step segments of one or two steps, which a 2h companion run cannot see."""
+
+    t: np.ndarray
+    y: np.ndarray
+    stats: np.ndarray
+    wall: float
+    warmup: float
+    failure: str | None
+    interrupted: bool
+    short_err: float = 0.0
+
+
+def run_once(scene: Scene, program: ForceProgram, spec, setting: float, t_out: np.ndarray,
+             progress: Callable[[float], None] | None = None) -> RawRun:
+    """Integrate ``scene`` once with ``spec`` at ``setting``, sampled at ``t_out``."""
+    runner = _Runner(spec, program, setting, progress, scene.time.duration,
+                     scale_floors(scene))
+    y_out, t_reached, interrupted = runner.run(initial_principal_state(scene), t_out)
+    keep = t_out <= t_reached
+    t_kept, y_kept = t_out[keep], y_out[keep]
+    if t_kept[-1] < t_reached:  # interrupted or failed between samples: keep the last state
+        t_kept, y_kept = np.append(t_kept, t_reached), np.vstack([y_kept, runner.y_last])
+    return RawRun(t_kept, y_kept, runner.stats, runner.wall, runner.warmup, runner.failure,
+                  interrupted, runner.short_err)
+
+
+def stability_hint(program: ForceProgram, setting: float, name: str) -> str:
+    """The likely cause of a divergence of ``name`` at step/rtol ``setting``: the step against
+    the scene's stiffest rate."""
+    rate = program.stiffest_rate
+    if rate > 0:
+        return (f"the stiffest term has rate {rate:.3g}/s, so explicit steps must stay below "
+                f"~{2.8 / rate:.3g} s (step here: {setting:.3g}); use integrator implicit or a "
+                "smaller step")
+    return "try a smaller step or tolerance"
+
+
+class _Runner:
+    """Walks the segments between window edges in chunks, filling the samples."""
+
+    def __init__(self, spec, program: ForceProgram, setting: float, progress, duration: float,
+                 floors: np.ndarray):
+        self.spec, self.program, self.setting, self.floors = spec, program, setting, floors
+        self.progress, self.duration = progress, duration
+        self.stats = np.zeros(5, dtype=np.int64)
+        self.wall, self.warmup = 0.0, 0.0
+        self.failure: str | None = None
+        self.y_last = None
+        self.t_now = 0.0
+        self.short_err = 0.0
+
+    def run(self, y0: np.ndarray, t_out: np.ndarray):
+        p = self.program
+        rot_only = p.translation_closed_form
+        y_full = y0.copy()
+        y_out = np.full((len(t_out), 13), np.nan)
+        edges = np.concatenate([[0.0], p.breakpoints(0.0, self.duration), [self.duration]])
+        self._warm_up(y0, rot_only)
+        start = time.perf_counter()
+        self.t_now, interrupted = 0.0, False
+        try:
+            for t0, t1 in zip(edges[:-1], edges[1:]):
+                active = p.active(0.5 * (t0 + t1))
+                self._segment(y_full, t0, t1, active, rot_only, t_out, y_out)
+                if self.failure is not None:
+                    break
+        except KeyboardInterrupt:  # y_full and self.t_now hold the last finished chunk
+            interrupted = True
+        self.wall = time.perf_counter() - start
+        self.y_last = y_full
+        return y_out, self.t_now, interrupted
+
+    def _warm_up(self, y0: np.ndarray, rot_only: bool) -> None:
+        """Compile or load the kernel from cache on a tiny problem; timed apart from the run."""
+        p = self.program
+        start = time.perf_counter()
+        y = (y0[6:] if rot_only else y0).copy()
+        self.spec.run_segment(y, 0.0, 1e-9, self.setting if self.setting else 1e-9,
+                              (p.active(0.0), p.codes, p.params, p.mass, p.inertia, self.floors),
+                              rot_only, np.empty(0), np.empty((0, y.size)),
+                              np.zeros(5, dtype=np.int64))
+        self.warmup = time.perf_counter() - start
+
+    def _segment(self, y_full, t0, t1, active, rot_only, t_out, y_out) -> None:
+        """Advance y_full (13,) from t0 to t1 in chunks and fill the samples; self.t_now follows
+        the time reached after every chunk (so Ctrl-C keeps it)."""
+        p = self.program
+        first = t0 == 0.0
+        sel = np.flatnonzero((t_out >= t0) & (t_out <= t1) if first else
+                             (t_out > t0) & (t_out <= t1))
+        accel = p.constant_force(active) / p.mass if rot_only else None
+        arrays = (active, p.codes, p.params, p.mass, p.inertia, self.floors)
+        # a segment of one or two steps (a force window shorter than the step) is stepped the
+        # same way by a 2h companion, so its error is invisible to Richardson: keep the kernel's
+        # own local estimate of it
+        short = self.spec.kind == "fixed" and (t1 - t0) <= 2 * self.setting * (1 + 1e-12)
+        t = t0
+        length = self._first_chunk(t0, t1)
+        while t < t1:
+            t_end = self._chunk_end(t, t0, t1, length)
+            idx = sel[(t_out[sel] >= t) & (t_out[sel] <= t_end)] if t == t0 else \
+                sel[(t_out[sel] > t) & (t_out[sel] <= t_end)]
+            y = y_full[6:].copy() if rot_only else y_full.copy()
+            ys = np.empty((idx.size, y.size))
+            steps_before = int(self.stats[0])
+            err, t_reached = self.spec.run_segment(y, t, t_end, self.setting, arrays, rot_only,
+                                                   t_out[idx], ys, self.stats)
+            if rot_only:
+                r0, v0 = y_full[0:3].copy(), y_full[3:6].copy()
+                tau = t_out[idx] - t
+                ys = np.hstack([r0 + np.outer(tau, v0) + 0.5 * np.outer(tau**2, accel),
+                                v0 + np.outer(tau, accel), ys])
+                dt = t_reached - t
+                y_full[0:3] = r0 + v0 * dt + 0.5 * accel * dt * dt
+                y_full[3:6] = v0 + accel * dt
+                y_full[6:] = y
+            else:
+                y_full[:] = y
+            good = t_out[idx] <= t_reached
+            y_out[idx[good]] = ys[good]
+            self.t_now = t_reached
+            if short:
+                self.short_err += err
+            if self.stats[4] != 0 or t_reached < t_end:  # NaN, underflow, or stopped early
+                self.failure = self._failure_message(t_reached)
+                return
+            if self.progress is not None:
+                self.progress(t_end / self.duration)
+            taken = max(int(self.stats[0]) - steps_before, 1)
+            length = (t_end - t) * min(16.0, max(0.5, CHUNK_STEPS / taken))
+            t = t_end
+
+    def _first_chunk(self, t0: float, t1: float) -> float:
+        if self.spec.kind == "exact":  # no steps: one evaluation per sample, cost independent of t
+            return t1 - t0
+        if self.spec.kind == "fixed":
+            return CHUNK_STEPS * self.setting
+        return FIRST_CHUNK * self.duration
+
+    def _chunk_end(self, t: float, t0: float, t1: float, length: float) -> float:
+        """End of the next call: t + length, on the segment's step grid for fixed steps."""
+        if self.spec.kind != "fixed":
+            return t1 if t + length >= t1 * (1 - 1e-12) else t + length
+        n = max(1, math.ceil((t1 - t0) / self.setting * (1 - 1e-12)))
+        h = (t1 - t0) / n
+        k = round((t - t0) / h) + max(1, round(length / h))
+        return t1 if k >= n else t0 + k * h
+
+    def _failure_message(self, t_reached: float) -> str:
+        status = int(self.stats[4])
+        what = "the state became NaN or infinite" if status == 1 else \
+            "the step size fell below round-off (the problem is stiff or singular there)" \
+            if status == 2 else "the integrator stopped early"
+        return (f"{self.spec.name} diverged at t = {t_reached:.6g} s: {what}; "
+                + stability_hint(self.program, self.setting, self.spec.name))
