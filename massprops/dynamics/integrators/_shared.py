@@ -12,6 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
+from massprops.dynamics.exact import QUATERNION_RENORM
 from massprops.dynamics.forces import rhs
 
 R_BLOCK, V_BLOCK, Q_BLOCK, W_BLOCK = range(4)
@@ -53,9 +54,11 @@ def blocks(n):
 
 @njit(cache=True)
 def project_quaternion(y, o):
-    """Re-normalise the quaternion y[o:o+4] in place (projection onto the unit sphere)."""
-    s = math.sqrt(y[o] * y[o] + y[o + 1] * y[o + 1] + y[o + 2] * y[o + 2] + y[o + 3] * y[o + 3])
-    if s > 0.0:
+    """Re-normalise the quaternion y[o:o+4] in place (projection onto the unit sphere) once its
+    squared norm is off 1 by more than QUATERNION_RENORM (why not always: see there)."""
+    n2 = y[o] * y[o] + y[o + 1] * y[o + 1] + y[o + 2] * y[o + 2] + y[o + 3] * y[o + 3]
+    s = math.sqrt(n2)
+    if s > 0.0 and abs(n2 - 1.0) > QUATERNION_RENORM:
         for i in range(o, o + 4):
             y[i] /= s
 
