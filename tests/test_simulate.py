@@ -297,3 +297,22 @@ def test_nan_divergence_names_time_and_stiff_rate():
     assert "1e+05" in message and "implicit" in message
     partial = info.value.partial
     assert partial is not None and np.all(np.isfinite(partial.trajectory.position))
+
+
+def test_cache_folders_unused_for_a_month_are_pruned(tmp_path):
+    """Every edit or upgrade keys a new numba cache folder (~8 MB): a new one removes the
+    others not used for UNUSED_CACHE_DAYS, and never the one in use or a recent one."""
+    import os
+    import time
+
+    import massprops.dynamics as dyn
+
+    old = time.time() - (dyn.UNUSED_CACHE_DAYS + 1) * 86400
+    for name in ("numba-stale", "numba-recent", "numba-current", "unrelated"):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "index.nbi").write_bytes(b"x")
+    for name in ("numba-stale", "numba-current", "unrelated"):
+        os.utime(tmp_path / name, (old, old))
+    dyn._prune_unused(tmp_path, keep=tmp_path / "numba-current")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["numba-current", "numba-recent",
+                                                          "unrelated"]

@@ -26,13 +26,32 @@ def _configure_numba_cache() -> None:
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
     target = base / "massprops" / f"numba-{digest.hexdigest()[:16]}"
     try:
+        fresh = not target.is_dir()
         target.mkdir(parents=True, exist_ok=True)
+        os.utime(target)  # "last used", for the pruning below (numba only reads a warm cache)
+        if fresh:
+            _prune_unused(target.parent, keep=target)
     except OSError:  # read-only home: a per-user temporary folder still caches within a boot
         target = Path(tempfile.gettempdir()) / f"massprops-numba-{digest.hexdigest()[:16]}"
         target.mkdir(parents=True, exist_ok=True)
     os.environ["NUMBA_CACHE_DIR"] = str(target)
     if "numba" in sys.modules:  # imported before us: make it re-read its settings
         sys.modules["numba"].config.reload_config()
+
+
+UNUSED_CACHE_DAYS = 30
+"""A cache folder of other sources (an older version, another checkout) not used for this many
+days is removed when a new one is made: each holds ~8 MB, and every upgrade makes one."""
+
+
+def _prune_unused(parent: Path, keep: Path) -> None:
+    import shutil
+    import time
+
+    cutoff = time.time() - UNUSED_CACHE_DAYS * 86400
+    for old in parent.glob("numba-*"):
+        if old != keep and old.is_dir() and old.stat().st_mtime < cutoff:
+            shutil.rmtree(old, ignore_errors=True)
 
 
 _configure_numba_cache()
