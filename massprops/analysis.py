@@ -6,10 +6,16 @@ import os
 from dataclasses import dataclass
 from typing import BinaryIO
 
+from massprops.errors import MassPropsError
 from massprops.health import MeshHealth, prepare_mesh
 from massprops.io import read_mesh
 from massprops.mass import MassProperties, mass_properties
 from massprops.mesh import Mesh
+from massprops.parallel import in_background
+
+OVERLAP_TRIANGLES = 1 << 15
+"""From this many triangles on, the integral starts on a second thread beside the health checks:
+most meshes pass them unchanged, and then its result is the one a later call would give."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,9 +46,24 @@ class Inspection:
 
 def inspect_mesh(mesh: Mesh, *, density: float | None = None, mass: float | None = None,
                  allow_open: bool = False) -> Inspection:
-    """Health-check ``mesh`` and integrate its mass properties (density default 1 kg/m³)."""
-    fixed, health = prepare_mesh(mesh, allow_open=allow_open)
-    return Inspection(fixed, health, mass_properties(fixed, density=density, mass=mass))
+    """Health-check ``mesh`` and integrate its mass properties (density default 1 kg/m³).
+
+    Errors of the health checks come first; the integral's own errors (a usage error in density
+    or mass, a degenerate volume) only for a mesh that passed them.
+    """
+    if mesh.faces.shape[0] < OVERLAP_TRIANGLES:
+        fixed, health = prepare_mesh(mesh, allow_open=allow_open)
+        return Inspection(fixed, health, mass_properties(fixed, density=density, mass=mass))
+    early = in_background(_outcome, mesh, density, mass)
+    try:
+        fixed, health = prepare_mesh(mesh, allow_open=allow_open)
+    finally:
+        properties, error = early()  # also on failure: no thread outlives the call
+    if fixed is not mesh:  # flipped or re-wound: the early integral is of the wrong surface
+        properties, error = _outcome(fixed, density, mass)
+    if error is not None:
+        raise error
+    return Inspection(fixed, health, properties)
 
 
 def inspect_file(source: str | os.PathLike | BinaryIO, *, format: str | None = None,
@@ -51,3 +72,12 @@ def inspect_file(source: str | os.PathLike | BinaryIO, *, format: str | None = N
     """Read a mesh file (or binary stream, with ``format``) and inspect it; see `inspect_mesh`."""
     mesh = read_mesh(source, format=format, unit=unit, name=name)
     return inspect_mesh(mesh, density=density, mass=mass, allow_open=allow_open)
+
+
+def _outcome(mesh: Mesh, density: float | None, mass: float | None
+             ) -> tuple[MassProperties | None, MassPropsError | None]:
+    """(mass_properties(mesh), None), or (None, the library error it raised) to raise later."""
+    try:
+        return mass_properties(mesh, density=density, mass=mass), None
+    except MassPropsError as exc:
+        return None, exc

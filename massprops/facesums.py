@@ -16,6 +16,7 @@ import numpy as np
 
 from massprops.errors import ComputationError, MeshFormatError
 from massprops.mesh import Mesh
+from massprops.surface import is_soup
 
 U = 2.0**-53
 """Unit round-off of float64."""
@@ -102,11 +103,17 @@ def face_sums(mesh: Mesh, origin: np.ndarray, *, accurate: bool, area: bool) -> 
 
 def _gatherer(mesh: Mesh) -> Callable[[int, int, np.ndarray], None]:
     """gather(start, n, out): out (3, 3, n) = the stored [a, b, c] x [x, y, z] of faces
-    start..start+n. Welded meshes (vertices <= faces, indices jump around): one transposed copy of
-    the vertices, then 1-D takes of 8-byte items. Soups: row takes, then a transposed copy.
+    start..start+n. STL soups (faces = arange): a transposed copy of the vertices' rows. Welded
+    meshes (vertices <= faces, indices jump around): one transposed copy of the vertices, then
+    1-D takes of 8-byte items. Other unwelded meshes: row takes, then a transposed copy.
     The caller checked the indices, so mode="clip" skips numpy's buffered bounds check."""
     vertices, faces = mesh.vertices, mesh.faces
-    if vertices.shape[0] <= faces.shape[0]:
+    if is_soup(faces, vertices.shape[0]):
+        corners = vertices.reshape(-1, 3, 3)
+
+        def gather(start: int, n: int, out: np.ndarray) -> None:
+            out[...] = corners[start:start + n].transpose(1, 2, 0)
+    elif vertices.shape[0] <= faces.shape[0]:
         columns, index = np.ascontiguousarray(vertices.T), np.ascontiguousarray(faces.T)
 
         def gather(start: int, n: int, out: np.ndarray) -> None:

@@ -12,13 +12,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from massprops.errors import DegenerateMeshError, MeshFormatError, MeshTopologyError
 from massprops.mesh import Mesh
-from massprops.nesting import Plan, orientation_plan, sample_windings
-from massprops.parallel import in_background
 from massprops.surface import (
     Edges,
     area_vector_sums,
@@ -29,6 +28,9 @@ from massprops.surface import (
     signed_volumes6,
 )
 from massprops.weld import weld
+
+if TYPE_CHECKING:  # imported where a repair needs it: most meshes never do
+    from massprops.nesting import Plan
 
 
 @dataclass(frozen=True)
@@ -114,9 +116,11 @@ class _Analysis:
 def _number_components(labels: np.ndarray, tri: np.ndarray, valid: np.ndarray
                        ) -> tuple[np.ndarray, int]:
     """Component index (m,) of each triangle, numbered by first valid triangle, and their count."""
-    lab = labels[tri[:, 0]]
     if not np.any(valid):
         return np.full(tri.shape[0], -1), 0
+    if not labels.any():  # every id under id 0: one component holds every triangle
+        return np.zeros(tri.shape[0], np.int8), 1
+    lab = labels[tri[:, 0]]
     one = lab == lab[np.argmax(valid)]
     if np.all(one):
         return np.zeros(tri.shape[0], np.int8), 1
@@ -137,14 +141,15 @@ def _analyse(mesh: Mesh) -> _Analysis:
         raise MeshFormatError(f"{mesh.name}: face vertex indices must lie in 0..{n - 1}, got "
                               f"{faces.min()}..{faces.max()}; the faces refer to missing vertices")
     origin = v[faces[0, 0]] if m else np.zeros(3)  # a point on the mesh: round-off scales with size
-    geometry = in_background(signed_volumes6, v, None if soup else faces, origin)
-    inv, reps = weld(v)
+    scratch = np.empty(max(n, 3 * m), np.uint64)  # the sort keys of both passes, in turn
+    inv, reps = weld(v, scratch=scratch)
     tri = inv.reshape(-1, 3) if soup else inv[faces]
     valid = (tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 2] != tri[:, 0])
     all_valid = bool(np.all(valid))
-    e = edges(tri if all_valid else tri[valid], reps.size)
+    e = edges(tri if all_valid else tri[valid], reps.size, scratch=scratch)
+    del scratch
     face_comp, n_comp = _number_components(connected_components(reps.size, e.u, e.v), tri, valid)
-    det6, flat = geometry()
+    det6, flat = signed_volumes6(v, None if soup else faces, origin)
     used = np.ones(reps.size, bool)
     if not (soup and all_valid):
         used[:] = False
@@ -349,6 +354,7 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False) -> tuple[Mesh, MeshHea
     volumes = _component_volumes(a, a.det6)
     if a.closed and a.n_comp == 1 and volumes[0] > 0:  # the fast path: nothing to repair
         return mesh, _health(mesh, a, volumes, warnings=_shape_notes(a))
+    from massprops.nesting import Plan, orientation_plan, sample_windings
     rewind = np.zeros(mesh.faces.shape[0], bool)
     if not a.oriented and int(a.edges.uses.max()) <= 2:
         flips = consistent_flips(a.tri[a.valid], a.reps.size)

@@ -47,23 +47,27 @@ def in_halves(fn: Callable[[int, int], _T], n: int, align: int) -> list[_T]:
     return [first(), second]
 
 
-def sort_in_two(blocks: Callable[[int, int], tuple[np.ndarray, np.ndarray]], rows: int,
-                width: int, align: int) -> tuple[np.ndarray, int]:
+def sort_in_two(make_blocks: Callable[[], Callable[[int, int], tuple[np.ndarray, np.ndarray]]],
+                rows: int, width: int, align: int, out: np.ndarray | None = None
+                ) -> tuple[np.ndarray, int]:
     """Keys of two kinds, made and sorted on two threads; (keys, k): keys (width · rows,) uint64,
-    keys[:k] the sorted keys of kind 0, keys[k:] those of kind 1.
+    keys[:k] the sorted keys of kind 0, keys[k:] those of kind 1. ``out``: a uint64 buffer of at
+    least width · rows to hold them (a view of it is returned), else a new array.
 
-    blocks(lo, hi) gives the keys of rows lo..hi (hi - lo <= ``align``) as two 1-D uint64 arrays
-    (kind 0, kind 1), ``width`` keys per row in all. Each thread makes the keys of half the rows
+    make_blocks() gives each thread its function blocks(lo, hi) (which may reuse buffers of its
+    own) returning the keys of rows lo..hi (hi - lo <= ``align``) as two 1-D uint64 arrays (kind
+    0, kind 1), ``width`` keys per row in all. Each thread makes the keys of half the rows
     straight into its half of the result, one kind from each end, so no block is kept; after a
-    swap that joins each kind, one thread sorts each. Kinds that split the key range (say, by
-    the top bit) give one sorted array: two sorts of half the keys instead of one of all.
+    swap that joins each kind, one thread sorts each. Kinds that split the key range (say, by the
+    top bit) give one sorted array: two sorts of half the keys instead of one of all.
     """
-    keys = np.empty(width * rows, np.uint64)
+    keys = np.empty(width * rows, np.uint64) if out is None else out[: width * rows]
     mid = rows // 2 // align * align
 
     def fill(start: int, stop: int, first: int) -> int:
         """Kind ``first`` from the front of the rows' part of keys, the other from its back;
         returns how many keys went to the front."""
+        blocks = make_blocks()
         front, back = width * start, width * stop
         for lo in range(start, stop, align):
             pair = blocks(lo, min(lo + align, stop))

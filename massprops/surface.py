@@ -6,16 +6,19 @@ Triangles given to these kernels are (t, 3) integer arrays of welded ids (see `m
 
 from __future__ import annotations
 
+import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
 from massprops.errors import MeshFormatError
-from massprops.parallel import in_halves
+from massprops.parallel import in_halves, sort_in_two
 from massprops.weld import id_dtype
 
-_CHUNK = 1 << 16  # rows per block of chunked passes: temporaries stay in cache, not in new pages
+_CHUNK = 1 << 15  # rows per block of chunked passes: temporaries stay in cache, not in new pages
+_LOW, _HIGH = (0, 1) if sys.byteorder == "little" else (1, 0)  # uint32 words of a uint64
 
 
 # --- edges ------------------------------------------------------------------------------------
@@ -85,41 +88,69 @@ class Edges:
                                      "open": uses == 1, "nonmanifold": uses > 2}[what]))
 
 
-def _paired(keys: np.ndarray) -> bool:
-    """Sorted keys come in pairs (2g, 2g+1), one pair per undirected edge: a closed 2-manifold."""
-    if keys.size % 2:
-        return False
-    one = np.uint64(1)
-    for lo in range(0, keys.size, 2 * _CHUNK):
-        k = keys[lo : lo + 2 * _CHUNK]
-        a, b = k[0::2], k[1::2]
-        if (np.any(a & one) or not np.array_equal(b, a | one) or np.any(a[1:] <= b[:-1])
-                or (lo and keys[lo] <= keys[lo - 1])):
-            return False
-    return True
+def _undirected_keys(tri: np.ndarray
+                     ) -> Callable[[], Callable[[int, int], tuple[np.ndarray, np.ndarray]]]:
+    """make_blocks for `sort_in_two`: blocks(lo, hi) gives the key min << 32 | max of every edge
+    a→b of triangles lo..hi, as (those with a < b, those with a > b). Written as two uint32 words
+    of a uint64: no shifts, and a sorted key splits back into its ids as views."""
+    size = min(_CHUNK, tri.shape[0])
+
+    def make_blocks() -> Callable[[int, int], tuple[np.ndarray, np.ndarray]]:
+        following = np.empty((size, 3), tri.dtype)
+        words = np.empty((size, 3, 2), np.uint32)
+        forward = np.empty((size, 3), bool)
+        backward = np.empty((size, 3), bool)
+
+        def blocks(lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
+            k = hi - lo
+            a, b, w = tri[lo:hi], following[:k], words[:k]
+            b[:, :2] = a[:, 1:]
+            b[:, 2] = a[:, 0]
+            np.minimum(a, b, out=w[..., _HIGH], casting="unsafe")  # ids are in 0..2**31
+            np.maximum(a, b, out=w[..., _LOW], casting="unsafe")
+            np.less(a, b, out=forward[:k])
+            np.logical_not(forward[:k], out=backward[:k])
+            key = w.view(np.uint64).reshape(-1)
+            return (np.compress(forward[:k].reshape(-1), key),
+                    np.compress(backward[:k].reshape(-1), key))
+
+        return blocks
+
+    return make_blocks
 
 
-def edges(tri: np.ndarray, n_ids: int) -> Edges:
-    """Edges of (t, 3) triangles of welded ids below ``n_ids``, each with three distinct ids."""
-    shift = _key_shift(n_ids)
-    keys = _edge_keys(tri, shift)
-    keys.sort()
-    one, mask, s1 = np.uint64(1), np.uint64((1 << shift) - 1), np.uint64(shift + 1)
+def _strictly_increasing(keys: np.ndarray) -> bool:
+    """No key repeats or comes before its predecessor (block by block: no large temporary)."""
+    last = keys.size - 1
+    return not any(np.any(keys[lo + 1 : hi + 1] <= keys[lo:hi])
+                   for lo, hi in ((lo, min(lo + _CHUNK, last)) for lo in range(0, last, _CHUNK)))
+
+
+def edges(tri: np.ndarray, n_ids: int, *, scratch: np.ndarray | None = None) -> Edges:
+    """Edges of (t, 3) triangles of welded ids below ``n_ids``, each with three distinct ids.
+    ``scratch``: a uint64 buffer of at least 3t to work in (overwritten), else one is allocated.
+
+    The keys of the edges used forward (a < b) and backward are sorted apart, on two threads; a
+    closed, consistently wound 2-manifold is the case where the two lists are equal and have no
+    repeats (every edge used once each way). Anything else is counted from all keys together.
+    """
+    _key_shift(n_ids)  # refuses more ids than the keys hold
+    keys, k = sort_in_two(_undirected_keys(tri), tri.shape[0], 3, _CHUNK, scratch)
+    forward, backward = keys[:k], keys[k:]
     ids = id_dtype(n_ids)
-    if _paired(keys):
-        u, v = np.empty(keys.size // 2, ids), np.empty(keys.size // 2, ids)
-        for lo in range(0, keys.size // 2, _CHUNK):
-            k = keys[2 * lo : 2 * (lo + _CHUNK) : 2]
-            u[lo : lo + _CHUNK] = k >> s1
-            v[lo : lo + _CHUNK] = (k >> one) & mask
-        return Edges(u, v)
-    und = keys >> one
+    if (forward.size == backward.size and _strictly_increasing(forward)
+            and np.array_equal(forward, backward)):
+        words = forward.view(np.uint32).reshape(-1, 2)
+        return Edges(words[:, _HIGH].astype(ids), words[:, _LOW].astype(ids))
+    one = np.uint64(1)
+    directed = np.concatenate((forward << one, (backward << one) | one))  # the direction as bit 0
+    directed.sort()
+    und = directed >> one
     first = np.flatnonzero(np.concatenate(([True], und[1:] != und[:-1]))) if und.size else und
     uses = np.diff(np.append(first, und.size))
-    backward = np.add.reduceat((keys & one).astype(np.int64), first) if first.size else uses
-    und = und[first]
-    return Edges((und >> np.uint64(shift)).astype(ids), (und & mask).astype(ids),
-                 uses - backward, backward)
+    back = np.add.reduceat((directed & one).astype(np.int64), first) if first.size else uses
+    words = und[first].view(np.uint32).reshape(-1, 2)
+    return Edges(words[:, _HIGH].astype(ids), words[:, _LOW].astype(ids), uses - back, back)
 
 
 # --- connected components -----------------------------------------------------------------------
@@ -131,28 +162,33 @@ def connected_components(n: int, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     decrease, so no cycle forms; meshes with ids in file order settle in a handful of rounds.
     """
     parent = np.arange(n, dtype=id_dtype(n))
-    if u.size:  # first round: every node hooks onto a smaller neighbour, a plain assignment
-        lo, hi = np.minimum(u, v), np.maximum(u, v)
-        parent[hi[::-1]] = lo[::-1]  # any winner is smaller; sorted input makes it the smallest
+    # np.minimum.at has a fast loop only for values of the array's own dtype
+    u, v = u.astype(parent.dtype, copy=False), v.astype(parent.dtype, copy=False)
+    blocks = range(0, u.size, _CHUNK)
+    if not all(np.all(u[lo : lo + _CHUNK] < v[lo : lo + _CHUNK]) for lo in blocks):
+        u, v = np.minimum(u, v), np.maximum(u, v)  # `edges` gives u < v: no copies then
+    while u.size:  # u < v: the ends of the edges still between trees (roots after round one)
+        for lo in range(0, u.size, _CHUNK):  # in blocks: the indices' cast to intp stays small
+            np.minimum.at(parent, v[lo : lo + _CHUNK], u[lo : lo + _CHUNK])
         _jump_to_roots(parent)
-    while u.size:  # u, v: roots as of the last round of the ends of the edges still between trees
+        if not parent.any():  # every node under node 0: one component, nothing to check
+            break
         u, v = parent[u], parent[v]
         cross = u != v
         if not np.any(cross):
             break
-        u, v = u[cross], v[cross]
-        np.minimum.at(parent, np.maximum(u, v), np.minimum(u, v))
-        _jump_to_roots(parent)
+        u, v = np.minimum(u[cross], v[cross]), np.maximum(u[cross], v[cross])
     return parent
 
 
 def _jump_to_roots(parent: np.ndarray) -> None:
-    """Pointer jumping, in place, until every node points at a root."""
+    """Pointer jumping, in place, until every node points at a root (two jumps per check)."""
+    grand = np.empty_like(parent)
     while True:
-        grand = parent[parent]
+        np.take(parent, parent, out=grand, mode="clip")  # labels are node numbers: in range
         if np.array_equal(grand, parent):
             return
-        parent[:] = grand
+        np.take(grand, grand, out=parent, mode="clip")
 
 
 def consistent_flips(tri: np.ndarray, n_ids: int) -> np.ndarray | None:
@@ -207,7 +243,7 @@ def signed_volumes6(vertices: np.ndarray, faces: np.ndarray | None, origin: np.n
     m = vertices.shape[0] // 3 if faces is None else faces.shape[0]
     det = np.empty(m)
     flat = np.empty(m, bool)
-    step = _CHUNK // 8  # many operations per block: keep the block in L1/L2
+    step = _CHUNK // 2  # many operations per block: a block and its temporaries stay in L2
     v9 = vertices.reshape(-1, 9) if faces is None else None
 
     def fill(start: int, stop: int) -> None:
@@ -240,7 +276,7 @@ def signed_volumes6(vertices: np.ndarray, faces: np.ndarray | None, origin: np.n
             f &= ny == 0
             f &= nz == 0
 
-    fill(0, m)
+    in_halves(fill, m, step)
     return det, flat
 
 

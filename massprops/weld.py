@@ -4,14 +4,16 @@ surface is the topology of the positions."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
-from massprops.parallel import in_halves
+from massprops.parallel import in_halves, sort_in_two
 
-_SIGN_BIT = np.uint64(1 << 63)
 _HASH_MULTIPLIERS = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9),
-                     np.uint64(0x94D049BB133111EB))  # odd splitmix64 constants
-_CHUNK = 1 << 16  # rows per block of chunked passes: temporaries stay in cache, not in new pages
+                     np.uint64(0x94D049BB133111EB))  # odd splitmix64 constants, one per axis
+_FINAL_MULTIPLIER = np.uint64(0xD6E8FEB86659FD93)
+_CHUNK = 1 << 15  # rows per block of chunked passes: a block's temporaries stay in L2
 
 
 def id_dtype(n: int) -> type:
@@ -20,42 +22,58 @@ def id_dtype(n: int) -> type:
 
 
 # --- weld: file vertices -> distinct positions ---------------------------------------------------
-def _sort_keys(bits: np.ndarray, shift: int, prefix_bits: int) -> np.ndarray:
-    """(n,) uint64: a hash of each (n, 3) coordinate bit-pattern row in the high bits and the row
-    index in the low ``shift`` bits, so one plain sort groups equal rows, each group in file order.
-    """
-    n = bits.shape[0]
-    key = np.empty(n, np.uint64)
+def _sorted_keys(v: np.ndarray, shift: int, prefix_bits: int, out: np.ndarray | None
+                 ) -> np.ndarray:
+    """(n,) uint64, sorted: a hash of each (n, 3) float64 coordinate row in the high bits and the
+    row index in the low ``shift`` bits, so equal rows are adjacent, each group in file order.
+    Made and sorted on two threads, split by the hash's top bit (see `sort_in_two`)."""
     s29, s31 = np.uint64(29), np.uint64(31)
     high = ~np.uint64((1 << max(64 - prefix_bits, shift)) - 1)
+    top = np.uint64(1 << 63)
+    size = min(_CHUNK, v.shape[0])
 
-    def fill(start: int, stop: int) -> None:
-        for lo in range(start, stop, _CHUNK):
-            b = bits[lo : min(lo + _CHUNK, stop)]
-            if np.any(b == _SIGN_BIT):  # -0.0 == 0.0 but their bit patterns differ
-                b = np.where(b == _SIGN_BIT, np.uint64(0), b)
-            t = b ^ (b >> s29)  # float32-born values end in 29 zero bits: fold high bits down
-            x = t[:, 0] * _HASH_MULTIPLIERS[0]  # the multiply carries low bits into high ones
-            x ^= x >> s31
-            for k in (1, 2):
-                x ^= t[:, k]
-                x *= _HASH_MULTIPLIERS[k]
-                x ^= x >> s31
+    def make_blocks() -> Callable[[int, int], tuple[np.ndarray, np.ndarray]]:
+        columns = np.empty((3, size))  # x, y, z rows: contiguous passes
+        folded = np.empty((3, size), np.uint64)
+        hashes = np.empty(size, np.uint64)
+        low = np.empty(size, bool)
+        high_bit = np.empty(size, bool)
+        rows = np.arange(size, dtype=np.uint64)
+
+        def blocks(lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
+            k = hi - lo
+            c, f, x = columns[:, :k], folded[:, :k], hashes[:k]
+            np.add(v[lo:hi].T, 0.0, out=c)  # -0.0 + 0.0 = +0.0: equal values, equal bits
+            t = c.view(np.uint64)
+            np.right_shift(t, s29, out=f)  # float32-born values end in 29 zero bits: fold
+            t ^= f  # the high bits down, then the multiplies carry them up again
+            np.multiply(t[0], _HASH_MULTIPLIERS[0], out=x)
+            for axis in (1, 2):
+                t[axis] *= _HASH_MULTIPLIERS[axis]
+                x ^= t[axis]
+            np.right_shift(x, s31, out=f[0])
+            x ^= f[0]
+            x *= _FINAL_MULTIPLIER
             x &= high
-            x |= np.arange(lo, lo + x.size, dtype=np.uint64)
-            key[lo : lo + x.size] = x
+            np.add(rows[:k], np.uint64(lo), out=f[1])
+            x |= f[1]
+            np.less(x, top, out=low[:k])
+            np.logical_not(low[:k], out=high_bit[:k])
+            return np.compress(low[:k], x), np.compress(high_bit[:k], x)
 
-    in_halves(fill, n, _CHUNK)
-    return key
+        return blocks
+
+    return sort_in_two(make_blocks, v.shape[0], 1, _CHUNK, out)[0]
 
 
-def _same_prefix(key: np.ndarray, shift: int) -> np.ndarray:
-    """(n-1,) bool: sorted key i+1 has the same hash prefix as key i."""
-    out = np.empty(max(key.size - 1, 0), bool)
+def _run_starts(key: np.ndarray, shift: int) -> np.ndarray:
+    """(n,) bool: sorted key i starts a run of equal hash prefixes (key 0 always does)."""
+    out = np.empty(key.size, bool)
+    out[:1] = True
     low = np.uint64((1 << shift) - 1)
-    for lo in range(0, out.size, _CHUNK):
-        hi = min(lo + _CHUNK, out.size)
-        np.less_equal(key[lo + 1 : hi + 1] ^ key[lo:hi], low, out=out[lo:hi])
+    for lo in range(1, key.size, _CHUNK):
+        hi = min(lo + _CHUNK, key.size)
+        np.greater(key[lo:hi] ^ key[lo - 1 : hi - 1], low, out=out[lo:hi])
     return out
 
 
@@ -80,53 +98,66 @@ def _untangle(v: np.ndarray, order: np.ndarray, tied: np.ndarray, same: np.ndarr
     same[pairs - 1] = np.all(v[order[pairs]] == v[order[pairs - 1]], axis=1)
 
 
-def _first_use_ids(order: np.ndarray, same: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Number the runs of equal rows of the sorted ``order`` by their first use in the file.
+def _first_use_ids(order: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Number the runs of equal rows of the sorted ``order`` (``starts``: where each run begins)
+    by their first use in the file. Returns inv and reps as `weld` does.
 
     File order keeps neighbouring vertices close in id: later gathers stay in cache and the
-    connected-components pass settles in a few rounds. Returns inv and reps as `weld` does.
-    Written to allocate little: fresh pages cost more than the arithmetic here.
+    connected-components pass settles in a few rounds. Written to allocate little (fresh pages
+    cost more than the arithmetic here): the ids go to their rows block by block.
     """
     n = order.size
-    flags = np.empty(n, bool)  # first, "row starts a run"; then, "row is a first use"
-    flags[0] = True
-    np.logical_not(same, out=flags[1:])
-    starts = np.flatnonzero(flags)
-    firsts = order[starts]  # ties sort by file index, so a run's first row is its first use
-    lengths = np.empty_like(starts)
-    np.subtract(starts[1:], starts[:-1], out=lengths[:-1])
-    lengths[-1] = n - starts[-1]
-    flags[:] = False
-    flags[firsts] = True
-    inv = np.empty(n, id_dtype(n))
-    np.cumsum(flags, out=inv)  # scratch: 1 + rank of each first use
+    firsts = np.compress(starts, order)  # ties sort by file index: a run's first is its first use
+    inv = np.zeros(n, id_dtype(n))  # first as scratch: 1 + the rank of each first use
+    inv[firsts] = 1
+    np.cumsum(inv, out=inv)
     new_id = inv[firsts]
     new_id -= 1
-    inv[order] = np.repeat(new_id, lengths)
-    return inv, np.flatnonzero(flags)
+    reps = np.empty(firsts.size, np.int64)
+    reps[new_id] = firsts
+
+    def scatter(start: int, stop: int) -> None:
+        """inv[order[i]] = new_id[run of sorted row i] for start <= i < stop."""
+        run = np.count_nonzero(starts[:start]) - 1
+        for lo in range(start, stop, _CHUNK):
+            hi = min(lo + _CHUNK, stop)
+            runs = np.cumsum(starts[lo:hi], dtype=np.intp)
+            runs += run
+            run = int(runs[-1])
+            inv[order[lo:hi]] = new_id[runs]  # a permutation: the halves write apart
+
+    in_halves(scatter, n, _CHUNK)
+    return inv, reps
 
 
 def _rows_match(v: np.ndarray, reps: np.ndarray, inv: np.ndarray) -> bool:
     """Every row of v equals the row of its id's first vertex, exactly."""
     def match(start: int, stop: int) -> bool:
+        first = np.empty((min(_CHUNK, stop - start), 3))
         for lo in range(start, stop, _CHUNK):
             hi = min(lo + _CHUNK, stop)
-            if not np.array_equal(np.take(v, reps[inv[lo:hi]], axis=0), v[lo:hi]):
+            rows = first[: hi - lo]
+            # ids and reps are in range by construction: mode="clip" skips the bounds checks
+            np.take(v, np.take(reps, inv[lo:hi], mode="clip"), axis=0, out=rows, mode="clip")
+            if not np.array_equal(rows, v[lo:hi]):
                 return False
         return True
 
     return all(in_halves(match, v.shape[0], _CHUNK))
 
 
-def weld(vertices: np.ndarray, *, prefix_bits: int = 64) -> tuple[np.ndarray, np.ndarray]:
+def weld(vertices: np.ndarray, *, prefix_bits: int = 64, scratch: np.ndarray | None = None
+         ) -> tuple[np.ndarray, np.ndarray]:
     """Identify vertices by exact coordinates (-0.0 == 0.0; no tolerance).
 
     vertices : (n, 3) float64.
     Returns ``inv`` (n,) int32 (int64 past 2**31), the welded id of each vertex, ids numbered in
     order of first use; and ``reps`` (u,) int64, the first vertex of each id (ascending).
     ``prefix_bits`` < 64 weakens the hash, for tests of the collision repair only.
+    ``scratch`` : a uint64 buffer of at least n to work in (its contents are overwritten), so a
+    caller can lend the same memory to several passes; else one is allocated.
 
-    How: sort a hash in the high bits with the row index packed into the low bits (one np.sort of
+    How: sort a hash in the high bits with the row index packed into the low bits (np.sort of
     uint64, no argsort), so equal coordinates end up adjacent. Then every vertex is compared with
     the first vertex of its run; that comparison is the exact check. A hash collision shows as a
     run holding two positions and is repaired by sorting that run by the coordinates themselves.
@@ -136,15 +167,15 @@ def weld(vertices: np.ndarray, *, prefix_bits: int = 64) -> tuple[np.ndarray, np
         return np.empty(0, np.int32), np.empty(0, np.int64)
     v = np.ascontiguousarray(vertices)
     shift = max(1, (n - 1).bit_length())
-    key = _sort_keys(v.view(np.uint64), shift, prefix_bits)
-    key.sort()
-    same = _same_prefix(key, shift)
+    key = _sorted_keys(v, shift, prefix_bits, scratch)
+    starts = _run_starts(key, shift)
     np.bitwise_and(key, np.uint64((1 << shift) - 1), out=key)
     order = key.view(np.int64)
-    inv, reps = _first_use_ids(order, same)
+    inv, reps = _first_use_ids(order, starts)
     if not _rows_match(v, reps, inv):
-        tied = same
+        tied = ~starts[1:]
         same = _equal_to_previous(v, order)
         _untangle(v, order, tied, same)
-        inv, reps = _first_use_ids(order, same)
+        starts[1:] = ~same
+        inv, reps = _first_use_ids(order, starts)
     return inv, reps

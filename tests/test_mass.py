@@ -237,16 +237,20 @@ def test_matches_exact_oracle_within_its_rounding_bound(shape, placement):
     assert got.uncertainty.input is None
 
 
-@pytest.mark.parametrize("layout", ["welded", "soup"])
-def test_several_blocks_and_both_vertex_layouts(layout):
+@pytest.mark.parametrize("layout", ["welded", "soup", "shuffled-soup"])
+def test_several_blocks_and_every_vertex_layout(layout):
     """More faces than one block (pairwise sums per block, math.fsum across them), welded
-    (shared vertices: the transposed-columns gather) or as a soup (3 vertices per face: the
-    row gather), tilted and 1e3 sizes away, against the exact oracle."""
+    (shared vertices: the transposed-columns gather), as an STL soup (3 vertices per face in
+    order: a transposed copy) or a soup whose faces list them out of order (the row gather),
+    tilted and 1e3 sizes away, against the exact oracle."""
     v, f = star(2200, seed=6)
     assert len(f) > facesums.BLOCK
     v = v @ rotation(16).T + [1e3, -2e3, 5e2]
-    if layout == "soup":
+    if layout != "welded":
         v, f = v[f].reshape(-1, 3), np.arange(3 * len(f)).reshape(-1, 3)
+    if layout == "shuffled-soup":
+        order = np.random.default_rng(3).permutation(len(v))
+        v, f = v[order], np.argsort(order)[f]
     got = mass_properties(mesh(v, f))
     volume, com, inertia = exact_mass_properties(v, f)
     bound = got.uncertainty.rounding
