@@ -101,3 +101,11 @@ def _spec(name):
 def _program(sc):
     from massprops.dynamics.forces import compile_forces
     return compile_forces(sc)
+
+
+def test_a_failed_probe_or_runaway_companion_gives_no_estimate_not_infinity(monkeypatch):
+    """The JSON output refuses inf (allow_nan=False): an estimate whose size is unknown is null."""
+    monkeypatch.setattr("massprops.dynamics.simulate.unresolved_mode_error",
+                        lambda *_args: math.inf)
+    sc = load_scene(SCENES / "unstable.yaml")
+    assert simulate(sc, integrator="implicit", step=0.008).diagnostics["error_estimate"] is None

@@ -258,8 +258,11 @@ def _error_estimate(scene, program, spec, setting, traj, others: list[RawRun] | 
     estimate = global_estimate(spec.kind, spec.order, state_error(traj, first, scales),
                                d_companions) + blind
     if unresolved(spec, setting, program):  # a mode all three runs fail alike: measured apart
-        estimate = max(estimate, unresolved_mode_error(scene, program, spec, setting, scales))
-    return estimate
+        probe = unresolved_mode_error(scene, program, spec, setting, scales)
+        if not math.isfinite(probe):  # the probe itself failed: the size is unknown
+            return None
+        estimate = max(estimate, probe)
+    return estimate if math.isfinite(estimate) else None  # a companion ran away: size unknown
 
 
 def _setting(spec, scene: Scene, program: ForceProgram, rtol: float | None,

@@ -46,7 +46,7 @@ def unresolved_mode_error(scene: Scene, program: ForceProgram, spec, setting: fl
                           scales: Scales) -> float:
     """The error (contract metric, ``scales``) of ``spec`` at step ``setting`` against a
     resolving dop853 run over the probe window [0, W], W = min(duration, max(PROBE_STEPS·h,
-    PROBE_PERIODS·2π/λ)). inf when either run fails there."""
+    PROBE_PERIODS·2π/λ)). inf when either run fails there (the caller reports no estimate)."""
     from massprops.dynamics.integrators import INTEGRATORS  # lazy registry: dop853 on demand
 
     rate = program.stiffest_rate
