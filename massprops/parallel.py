@@ -4,6 +4,7 @@ halves, independent passes side by side, a cancellable job beside the main one).
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from collections.abc import Callable
 from typing import Generic, TypeVar
@@ -137,7 +138,5 @@ class CancellableJob(Generic[_T]):
         """Cancel the job and wait until its thread has ended, dropping its result or exception
         (for a caller that has its own outcome to report)."""
         self.cancel()
-        try:
+        with contextlib.suppress(Exception):  # dropped on purpose: see above
             self._result()
-        except Exception:  # dropped on purpose: see above
-            pass

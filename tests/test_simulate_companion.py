@@ -92,8 +92,8 @@ def test_ctrl_c_while_waiting_for_the_companion_keeps_the_result(monkeypatch):
 
     def run_once(scene, program, spec, setting, t_out, progress=None):
         if setting != 1e-8:  # the companion: hold it until Ctrl-C was pressed while waiting
-            main_done.wait()
-            pressed.wait()
+            main_done.wait(30)  # bounded: a broken hand-off fails the test, never hangs it
+            pressed.wait(30)
             return real(scene, program, spec, setting, t_out, progress)
         out = real(scene, program, spec, setting, t_out, progress)
         main_done.set()
@@ -188,7 +188,7 @@ def test_cancel_stops_the_job_at_its_next_report():
                 report(k / 100)
             except KeyboardInterrupt:
                 return k
-            cancelled.wait()  # hold after each chunk until the test has cancelled
+            cancelled.wait(30)  # hold after each chunk until the test has cancelled
         return None
 
     job = CancellableJob(chunks)
@@ -212,7 +212,7 @@ def test_result_polls_while_waiting():
     release, polls = threading.Event(), []
 
     def wait_for_release(report):
-        release.wait()
+        release.wait(30)
         return 7
 
     job = CancellableJob(wait_for_release)

@@ -106,8 +106,11 @@ def test_a_binary_stl_from_a_named_pipe_is_read_once(tmp_path):
     data = packed(triangles(3))
     fifo = tmp_path / "pipe.stl"
     os.mkfifo(fifo)
-    writer = threading.Thread(target=fifo.write_bytes, args=(data,))
+    # daemon, joined with a timeout: if the read fails before opening the pipe, the writer would
+    # block in open() forever and keep the test process from exiting
+    writer = threading.Thread(target=fifo.write_bytes, args=(data,), daemon=True)
     writer.start()
     mesh = read_mesh(fifo)
-    writer.join()
+    writer.join(timeout=10)
+    assert not writer.is_alive()
     assert mesh.vertices.tobytes() == decoded(data).tobytes()

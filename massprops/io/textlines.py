@@ -7,6 +7,7 @@ line per operation, so every step here works on the whole byte buffer with numpy
 
 from __future__ import annotations
 
+import contextlib
 import io
 import re
 from dataclasses import dataclass
@@ -117,13 +118,11 @@ def parse_numbers(
     what : what the lines should hold, for the message (e.g. ``"vertex 'x y z'"``).
     """
     if counts.size and (counts == counts[0]).all() and counts[0] > 0:
-        try:
-            # numpy's C reader is 2-3x faster than converting a list of tokens, but needs a
-            # fixed number of columns; anything it rejects goes the general way below.
+        # numpy's C reader is 2-3x faster than converting a list of tokens, but needs a fixed
+        # number of columns; anything it rejects goes the general way below.
+        with contextlib.suppress(ValueError):
             table = np.loadtxt(io.BytesIO(block), dtype=dtype, comments=None, ndmin=2)
             return table.reshape(-1)
-        except ValueError:
-            pass
     tokens = block.split()
     try:
         return np.array(tokens, dtype=dtype)
