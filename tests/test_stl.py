@@ -114,3 +114,12 @@ def test_a_binary_stl_from_a_named_pipe_is_read_once(tmp_path):
     writer.join(timeout=10)
     assert not writer.is_alive()
     assert mesh.vertices.tobytes() == decoded(data).tobytes()
+
+
+@pytest.mark.timeout(10)
+def test_the_fast_path_never_opens_a_named_pipe(tmp_path):
+    """Whether to take the fast path is decided from a stat of the path: a pipe is left to the
+    caller's single read. Opening it here would block (no writer): the timeout fails the test."""
+    fifo = tmp_path / "pipe.stl"
+    os.mkfifo(fifo)
+    assert stl._read_binary_file(fifo, "pipe.stl") is None

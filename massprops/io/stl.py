@@ -106,9 +106,14 @@ def _read_binary_file(path: Path, name: str) -> Mesh | None:
     soup's face indices are written while a block is in cache.
     """
     try:
+        # Decided from the path, before any open: opening a FIFO blocks until a writer comes and
+        # reads its bytes once, so a pipe must be opened by the caller's one read alone (a second
+        # open after the writer finished would wait forever).
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return None
         with open(path, "rb") as f:
             status = os.fstat(f.fileno())
-            if not stat.S_ISREG(status.st_mode):  # a pipe can be read only once: by the caller
+            if not stat.S_ISREG(status.st_mode):  # replaced by a pipe since the stat: give up
                 return None
             n = _header_count(f.read(_HEADER_BYTES + _COUNT_BYTES))
             if not n or status.st_size != _HEADER_BYTES + _COUNT_BYTES + _RECORD.itemsize * n:
