@@ -40,6 +40,8 @@ class Inspection:
         out = {"file": self.mesh.name}
         out.update(self.properties.as_dict())
         out["mesh"] = self.health.as_dict()
+        if self.health.weld is not None:
+            out["repairs"] = {"weld": self.health.weld.as_dict()}
         out["warnings"] = list(self.warnings)
         return out
 

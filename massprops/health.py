@@ -10,7 +10,7 @@ surfaces) is refused, or computed with warnings under ``allow_open``. The kernel
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -24,13 +24,32 @@ from massprops.surface import (
     connected_components,
     consistent_flips,
     edges,
+    exactly_flat,
     is_soup,
     signed_volumes6,
 )
-from massprops.weld import weld
+from massprops.tolerances import EPS, EPS32, NEAR_WELD_ULPS
+from massprops.weld import near_groups, weld
 
 if TYPE_CHECKING:  # imported where a repair needs it: most meshes never do
     from massprops.nesting import Plan
+
+
+@dataclass(frozen=True)
+class CrackWeld:
+    """Vertices moved to close round-off cracks (`tolerances.NEAR_WELD_ULPS`).
+
+    vertices : distinct positions moved onto another. max_distance : m, the farthest move
+    (Euclidean). tolerance : m, the per-axis bound a move had to respect.
+    """
+
+    vertices: int
+    max_distance: float
+    tolerance: float
+
+    def as_dict(self) -> dict:
+        return {"vertices": self.vertices, "max_distance": self.max_distance,
+                "tolerance": self.tolerance}
 
 
 @dataclass(frozen=True)
@@ -54,6 +73,8 @@ class MeshHealth:
     flipped : the whole mesh was inside out and every face was reversed.
     rewound_faces : file faces reversed to agree with their neighbours.
     warnings : one line each: what is odd and what it means for the result.
+    weld : the round-off cracks welded shut (`CrackWeld`), or None; reported under
+        ``repairs`` rather than in the ``"mesh"`` object.
     """
 
     vertices: int
@@ -74,10 +95,13 @@ class MeshHealth:
     flipped: bool
     rewound_faces: int
     warnings: tuple[str, ...]
+    weld: CrackWeld | None = None
 
     def as_dict(self) -> dict:
-        """The JSON ``"mesh"`` object: every field but ``warnings`` (reported beside it)."""
-        out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "warnings"}
+        """The JSON ``"mesh"`` object: every field but ``warnings`` and ``weld`` (reported beside
+        it)."""
+        out = {f.name: getattr(self, f.name) for f in fields(self)
+               if f.name not in ("warnings", "weld")}
         out["component_volumes"] = list(self.component_volumes)
         return out
 
@@ -133,7 +157,9 @@ def _number_components(labels: np.ndarray, tri: np.ndarray, valid: np.ndarray
     return np.where(uniq[pos] == lab, rank[pos], -1), int(uniq.size)
 
 
-def _analyse(mesh: Mesh) -> _Analysis:
+def _analyse(mesh: Mesh, flat_out: np.ndarray | None = None) -> _Analysis:
+    """The kernels' findings; ``flat_out`` (m,) bool marks triangles known to have exactly zero
+    area (`exactly_flat`), left out of the topology like those with a repeated corner."""
     v, faces = mesh.vertices, mesh.faces
     n, m = v.shape[0], faces.shape[0]
     soup = is_soup(faces, n)  # then every index is in range, and every vertex is used
@@ -145,11 +171,15 @@ def _analyse(mesh: Mesh) -> _Analysis:
     inv, reps = weld(v, scratch=scratch)
     tri = inv.reshape(-1, 3) if soup else inv[faces]
     valid = (tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 2] != tri[:, 0])
+    if flat_out is not None:
+        valid &= ~flat_out
     all_valid = bool(np.all(valid))
     e = edges(tri if all_valid else tri[valid], reps.size, scratch=scratch)
     del scratch
     face_comp, n_comp = _number_components(connected_components(reps.size, e.u, e.v), tri, valid)
     det6, flat = signed_volumes6(v, None if soup else faces, origin)
+    if flat_out is not None:
+        flat = flat_out | ~valid
     used = np.ones(reps.size, bool)
     if not (soup and all_valid):
         used[:] = False
@@ -245,7 +275,8 @@ def _euler_characteristics(a: _Analysis) -> np.ndarray:
 
 
 def _health(mesh: Mesh, a: _Analysis, volumes: np.ndarray, *, flipped: bool = False,
-            rewound: int = 0, warnings: list[str] | tuple[str, ...] = ()) -> MeshHealth:
+            rewound: int = 0, warnings: list[str] | tuple[str, ...] = (),
+            weld: CrackWeld | None = None) -> MeshHealth:
     n_ids = a.reps.size
     return MeshHealth(
         vertices=mesh.n_vertices, faces=mesh.n_faces, triangles=int(mesh.faces.shape[0]),
@@ -258,7 +289,7 @@ def _health(mesh: Mesh, a: _Analysis, volumes: np.ndarray, *, flipped: bool = Fa
         oriented=a.oriented, components=a.n_comp,
         component_volumes=tuple(float(x) for x in volumes),
         cavities=int(np.count_nonzero(volumes < 0)), flipped=flipped, rewound_faces=rewound,
-        warnings=tuple(warnings))
+        warnings=(*mesh.notes, *warnings), weld=weld)
 
 
 # --- orientation of the pieces ------------------------------------------------------------------
@@ -314,7 +345,69 @@ def _reverse(mesh: Mesh, flip: np.ndarray) -> Mesh:
             return mesh.with_faces(out)
     out = faces.copy()
     out[flip] = faces[flip][:, ::-1]
-    return Mesh(mesh.vertices, out, None, mesh.coordinate_dtype, mesh.coordinate_scale, mesh.name)
+    return replace(mesh, faces=out, polygon_sizes=None)
+
+
+# --- round-off cracks ----------------------------------------------------------------------------
+def _close_cracks(mesh: Mesh, a: _Analysis
+                  ) -> tuple[Mesh, _Analysis, CrackWeld | None, list[str]]:
+    """A mesh whose open edges are round-off only, closed: first exactly zero-area faces left out
+    of the topology (a collinear sliver adds edges no face balances, and encloses nothing), then
+    the two sides of round-off cracks welded (`tolerances.NEAR_WELD_ULPS`). Each step is kept only
+    if it leaves no open edge; otherwise (a real gap) the mesh and analysis come back unchanged."""
+    flat = _exactly_flat(mesh, a)
+    b = _analyse(mesh, flat) if flat.any() else a
+    notes = [f"left {_count(int(np.count_nonzero(flat)), 'zero-area face')} (corners on one "
+             f"line) out of the topology: they enclose nothing"] if flat.any() else []
+    if b.edges.count("open") == 0:
+        return mesh, b, None, notes
+    welded, weld_report = _weld_cracks(mesh, b)
+    if welded is None:
+        return mesh, a, None, []
+    flat = _exactly_flat(welded, _analyse(welded))
+    c = _analyse(welded, flat)
+    if c.edges.count("open"):
+        return mesh, a, None, []
+    notes = [f"closed round-off cracks: welded {_count(weld_report.vertices, 'vertex position')} "
+             f"onto copies at most {weld_report.max_distance:.3g} m away (tolerance "
+             f"{weld_report.tolerance:.3g} m, {NEAR_WELD_ULPS} ulps of the largest coordinate); "
+             f"the input error bar covers the move"]
+    if flat.any():
+        notes.append(f"left {_count(int(np.count_nonzero(flat)), 'zero-area face')} (corners on "
+                     f"one line) out of the topology: they enclose nothing")
+    return welded, c, weld_report, notes
+
+
+def _exactly_flat(mesh: Mesh, a: _Analysis) -> np.ndarray:
+    """(m,) bool: triangles with three distinct corners and exactly zero area."""
+    out = np.zeros(mesh.faces.shape[0], bool)
+    out[a.valid] = exactly_flat(mesh.vertices, mesh.faces[a.valid])
+    return out
+
+
+def _weld_cracks(mesh: Mesh, a: _Analysis) -> tuple[Mesh | None, CrackWeld | None]:
+    """The mesh with the positions at its unbalanced edges welded within the round-off tolerance
+    (each group onto its first position in file order), or (None, None) if none are that close."""
+    bad = a.edges.imbalance != 0
+    ends = np.unique(np.concatenate((a.edges.u[bad], a.edges.v[bad])))
+    points = mesh.vertices[a.reps[ends]]
+    eps = EPS32 if mesh.coordinate_dtype == np.float32 else EPS
+    tol = NEAR_WELD_ULPS * eps * float(np.abs(mesh.vertices).max())
+    target = near_groups(points, tol) if tol > 0 else np.arange(ends.size)
+    moved = np.flatnonzero(target != np.arange(ends.size))
+    if not moved.size:
+        return None, None
+    shift = points[target[moved]] - points[moved]
+    position = mesh.vertices[a.reps].copy()
+    position[ends[moved]] = points[target[moved]]
+    corners = a.tri.reshape(-1)
+    hit = np.isin(corners, ends[moved])
+    vertices = mesh.vertices.copy()
+    vertices[mesh.faces.reshape(-1)[hit]] = position[corners[hit]]
+    report = CrackWeld(int(moved.size), float(np.linalg.norm(shift, axis=1).max()), tol)
+    return replace(mesh, vertices=vertices,
+                   vertex_displacement=max(mesh.vertex_displacement,
+                                           float(np.abs(shift).max()))), report
 
 
 # --- public -------------------------------------------------------------------------------------
@@ -347,13 +440,17 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False) -> tuple[Mesh, MeshHea
         raise MeshTopologyError(f"{mesh.name}: mesh has no faces; expected a closed surface of "
                                 f"at least 4 triangles; check that the file holds faces")
     a = _analyse(mesh)
+    cracks, crack_notes = None, []
+    if a.edges.count("open"):
+        mesh, a, cracks, crack_notes = _close_cracks(mesh, a)
     if np.count_nonzero(a.used) < 4:
         raise DegenerateMeshError(f"{mesh.name}: the faces span only {np.count_nonzero(a.used)} "
                                   f"distinct vertex positions (zero-area faces aside); a solid "
                                   f"needs at least 4")
     volumes = _component_volumes(a, a.det6)
     if a.closed and a.n_comp == 1 and volumes[0] > 0:  # the fast path: nothing to repair
-        return mesh, _health(mesh, a, volumes, warnings=_shape_notes(a))
+        return mesh, _health(mesh, a, volumes, warnings=crack_notes + _shape_notes(a),
+                             weld=cracks)
     from massprops.nesting import Plan, orientation_plan, sample_windings
     rewind = np.zeros(mesh.faces.shape[0], bool)
     if not a.oriented and int(a.edges.uses.max()) <= 2:
@@ -366,7 +463,7 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False) -> tuple[Mesh, MeshHea
     det6 = np.where(rewind, -a.det6, a.det6)
     closed = a.closed or (bool(rewind.any()) and bool(np.all(a.edges.uses == 2)))
     volumes = _component_volumes(a, det6)
-    warnings = []
+    warnings = list(crack_notes)
     if not closed:
         if not allow_open:
             n_open = a.edges.count("open" if rewind.any() else "unbalanced")
@@ -401,4 +498,4 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False) -> tuple[Mesh, MeshHea
         warnings.insert(0, f"re-wound {rewound} faces to a consistent orientation")
     volumes = volumes * np.where(plan.flip, -1.0, 1.0)
     return fixed, _health(mesh, a, volumes, flipped=bool(plan.whole and not np.all(touched)),
-                          rewound=rewound, warnings=warnings + _shape_notes(a))
+                          rewound=rewound, warnings=warnings + _shape_notes(a), weld=cracks)

@@ -18,7 +18,8 @@ error: correct to ~1e-16 of each d.
 
 Error bars. ``rounding`` bounds this computation's floating-point error against the exact values
 of the stored vertices (first order, with margins; see ``det_error`` and ``_moments``).
-``input`` is the first-order effect of float32 coordinates (binary STL) known to half an ulp.
+``input`` is the first-order effect of float32 coordinates (binary STL) known to half an ulp, and
+of vertices the health checks moved to close round-off cracks (``Mesh.vertex_displacement``).
 """
 
 from __future__ import annotations
@@ -68,8 +69,9 @@ class Uncertainty:
 @dataclass(frozen=True, eq=False)
 class ErrorBars:
     """rounding : bounds of this computation's floating-point error against the exact values of
-    the stored vertices. input : None unless the file stored float32 coordinates; then bounds of
-    the change caused by every coordinate moving by half a float32 ulp (times the unit factor)."""
+    the stored vertices. input : None unless the file stored float32 coordinates or vertices were
+    welded across round-off cracks; then bounds of the change caused by every coordinate moving
+    by half a float32 ulp (times the unit factor) plus the welding's largest move."""
 
     rounding: Uncertainty
     input: Uncertainty | None = None
@@ -124,7 +126,7 @@ def mass_properties(mesh: Mesh, *, density: float | None = None,
     """
     _check_density_mass(density, mass)
     _check_faces(mesh)
-    area = mesh.coordinate_dtype == np.float32
+    area = mesh.coordinate_dtype == np.float32 or mesh.vertex_displacement > 0
     origin, sums = _integrate(mesh, area)
     mo = _moments(sums, reach_of(sums), mesh.name)
 
@@ -146,7 +148,7 @@ def mass_properties(mesh: Mesh, *, density: float | None = None,
     rounding = Uncertainty(float(mo.volume_err), float(total_err), _frozen(com_err),
                            _frozen(inertia_err), _frozen(moments_err))
     data_err = None
-    if area:
+    if area:  # float32 coordinates or welded cracks: the input's own uncertainty
         data_err = _input_uncertainty(mesh, origin + sums.lowest, origin + sums.highest,
                                       sums.area, mo.volume, com, rho, inertia, mass is not None)
     return MassProperties(float(mo.volume), float(total), float(rho), _frozen(com),
@@ -278,7 +280,8 @@ def _input_uncertainty(mesh: Mesh, lo: np.ndarray, hi: np.ndarray, area: np.ndar
                        volume: float, com: np.ndarray, rho: float, inertia: np.ndarray,
                        mass_given: bool) -> Uncertainty:
     """First-order effect of every coordinate moving by up to η_i: half a float32 ulp of the
-    largest |coordinate| on axis i in the file unit, times the unit factor.
+    largest |coordinate| on axis i in the file unit, times the unit factor (float32 sources),
+    plus ``mesh.vertex_displacement`` (vertices moved to close round-off cracks).
 
     Moving the surface by δx changes ∫g dV by ∮ g (δx·n) dA, and |δx_i| <= η_i everywhere, so
     |δ∫g| <= max|g| Σ_i η_i A_i, A_i = Σ_f |area vector_i| (``area`` holds twice that). Volume:
@@ -286,9 +289,11 @@ def _input_uncertainty(mesh: Mesh, lo: np.ndarray, hi: np.ndarray, area: np.ndar
     move is second order there because ∫ s dV = 0). |s_i| <= reach_i from the bounding box.
     """
     scale = mesh.coordinate_scale
-    # lo, hi come rounded from v - o: 8u more keeps them upper bounds of the file's |values|
-    largest = (np.maximum(np.abs(lo), np.abs(hi)) * (1 + 8 * U) / scale).astype(np.float32)
-    eta = np.spacing(largest).astype(np.float64) * (0.5 * scale * (1 + 2.0**-20))
+    eta = np.full(3, mesh.vertex_displacement)
+    if mesh.coordinate_dtype == np.float32:
+        # lo, hi come rounded from v - o: 8u more keeps them upper bounds of the file's |values|
+        largest = (np.maximum(np.abs(lo), np.abs(hi)) * (1 + 8 * U) / scale).astype(np.float32)
+        eta += np.spacing(largest).astype(np.float64) * (0.5 * scale * (1 + 2.0**-20))
     flux = 1.01 * float(eta @ area) / 2                  # 1 % for the second-order terms
     reach = np.maximum(hi - com, com - lo)
     g = np.outer(reach, reach)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -24,6 +24,11 @@ class Mesh:
     coordinate_scale : the ``--unit`` factor applied (file unit -> metre); the float32 rounding
         happened before it, so it scales that uncertainty too.
     name : what to call the mesh in messages and reports (usually the path).
+    vertex_displacement : m, how far (per axis) any vertex may lie from where the file put it:
+        0.0 as read; set when the health checks weld the two sides of a round-off crack. The
+        ``input`` error bar of the mass properties covers it.
+    notes : what the reader skipped or changed on the way (one line each, e.g. OBJ polyline
+        elements); reported as warnings.
     """
 
     vertices: np.ndarray
@@ -32,6 +37,8 @@ class Mesh:
     coordinate_dtype: np.dtype = field(default_factory=lambda: np.dtype(np.float64))
     coordinate_scale: float = 1.0
     name: str = "<mesh>"
+    vertex_displacement: float = 0.0
+    notes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         v, f, sizes = self.vertices, self.faces, self.polygon_sizes
@@ -80,13 +87,11 @@ class Mesh:
 
     def with_vertices(self, vertices: np.ndarray, name: str | None = None) -> Mesh:
         """The same faces over new vertex positions (same shape)."""
-        return Mesh(vertices, self.faces, self.polygon_sizes, self.coordinate_dtype,
-                    self.coordinate_scale, self.name if name is None else name)
+        return replace(self, vertices=vertices, name=self.name if name is None else name)
 
     def with_faces(self, faces: np.ndarray) -> Mesh:
         """The same vertices with re-wound faces (same count and fan layout)."""
-        return Mesh(self.vertices, faces, self.polygon_sizes, self.coordinate_dtype,
-                    self.coordinate_scale, self.name)
+        return replace(self, faces=faces)
 
 
 def fan_triangulate(flat: np.ndarray, sizes: np.ndarray

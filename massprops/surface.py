@@ -15,6 +15,7 @@ import numpy as np
 
 from massprops.errors import MeshFormatError
 from massprops.parallel import in_halves, sort_in_two
+from massprops.tolerances import EPS
 from massprops.weld import id_dtype
 
 _CHUNK = 1 << 15  # rows per block of chunked passes: temporaries stay in cache, not in new pages
@@ -291,6 +292,35 @@ def area_vector_sums(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarra
         total += n.sum(axis=0) / 2
         area += float(np.linalg.norm(n, axis=1).sum()) / 2
     return total, area
+
+
+def exactly_flat(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(t,) bool: whether each triangle (``faces`` (t, 3) indices into ``vertices``) has exactly
+    zero area, its corners coinciding or on one line, decided for the stored float64 values.
+
+    A float cross product can round a collinear triangle to a tiny non-zero normal and a thin one
+    to zero, so only a filter runs in floats: a triangle whose computed normal is above a bound of
+    that rounding is not flat; the few below it are decided in exact rational arithmetic (every
+    float is a rational).
+    """
+    p0 = np.take(vertices, faces[:, 0], axis=0)
+    e1 = np.take(vertices, faces[:, 1], axis=0) - p0
+    e2 = np.take(vertices, faces[:, 2], axis=0) - p0
+    normal = np.abs(np.cross(e1, e2))
+    # |computed - exact| per component <= (3u + O(u²)) (|a b| + |c d|) with the edges' own
+    # rounding (u each) included; 8u leaves a margin, and the exact test below settles the rest.
+    yzx, zxy = [1, 2, 0], [2, 0, 1]
+    scale = np.abs(e1[:, yzx] * e2[:, zxy]) + np.abs(e1[:, zxy] * e2[:, yzx])
+    maybe = np.flatnonzero(np.all(normal <= 8 * EPS * scale, axis=1))
+    out = np.zeros(faces.shape[0], bool)
+    from fractions import Fraction  # only meshes open at first get here: keep start-up lean
+
+    for f in maybe:
+        a, b, c = ([Fraction(x) for x in vertices[i]] for i in faces[f])
+        u, w = [q - p for p, q in zip(a, b)], [q - p for p, q in zip(a, c)]
+        out[f] = (u[1] * w[2] == u[2] * w[1] and u[2] * w[0] == u[0] * w[2]
+                  and u[0] * w[1] == u[1] * w[0])
+    return out
 
 
 def winding_numbers(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:

@@ -27,3 +27,14 @@ MIN_VOLUME_TO_ERROR = 100.0
 nothing we can resolve (flat, or inside-out halves cancelling) and is refused as degenerate,
 rather than reported as 0, a random sign or NaN. A bound-based test, unlike a fraction of the
 bounding box, accepts a needle of aspect 1e-6 lying along the box diagonal."""
+
+NEAR_WELD_ULPS = 8
+"""Round-off cracks: when a mesh is open, the vertices at its open edges whose coordinates differ
+by at most this many units of round-off of the file's largest |coordinate| (float64 eps, or
+float32 eps for binary STL, times that coordinate) are one vertex. CAD and asset exporters compute
+each copy of a shared corner separately (in the assembly's frame, then transformed), and the
+copies differ in their last bits: seen 1.4 and 0.3 ulps of the largest coordinate on public
+robot parts. Eight ulps welds those and nothing a modeller could have meant: a real feature of a
+part is many orders above 1e-15 of its coordinates, and trimesh's fixed 1e-8 m is a guess that
+merges real features of a small part and misses the cracks of a large one. The weld is bounded
+too: only groups no wider than the tolerance are welded, and only if that leaves no open edge."""

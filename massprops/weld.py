@@ -179,3 +179,26 @@ def weld(vertices: np.ndarray, *, prefix_bits: int = 64, scratch: np.ndarray | N
         starts[1:] = ~same
         inv, reps = _first_use_ids(order, starts)
     return inv, reps
+
+
+# --- near weld: the two sides of a round-off crack --------------------------------------------
+def near_groups(points: np.ndarray, tol: float) -> np.ndarray:
+    """(k,) index of the point each of ``points`` (k, 3) is welded to: its group's first point,
+    or itself. Points within ``tol`` of each other in every coordinate form a group (chains
+    included); a group wider than ``tol`` on some axis is not a cluster of one position's copies
+    but a run of distinct points, and is left alone."""
+    from scipy.spatial import cKDTree  # only a mesh with open edges gets here
+
+    k = points.shape[0]
+    pairs = cKDTree(points).query_pairs(tol, p=np.inf, output_type="ndarray")
+    if not pairs.size:
+        return np.arange(k)
+    from massprops.surface import connected_components
+
+    label = connected_components(k, pairs[:, 0], pairs[:, 1]).astype(np.int64)
+    low = np.full((k, 3), np.inf)
+    high = np.full((k, 3), -np.inf)
+    np.minimum.at(low, label, points)
+    np.maximum.at(high, label, points)
+    narrow = np.all(high - low <= tol, axis=1)
+    return np.where(narrow[label], label, np.arange(k))

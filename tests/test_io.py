@@ -504,8 +504,9 @@ BAD_FILES = {
                         MeshFormatError, "line 8: vertex index 5 is out of range"),
     "obj-negative-range": ("r.obj", TETRA_OBJ.replace("f 2 3 4", "f 2 3 -5").encode(),
                            MeshFormatError, "line 8: vertex index -5"),
-    "obj-two-vertex-face": ("t.obj", TETRA_OBJ.replace("f 1 4 3", "f 1 4").encode(),
-                            MeshFormatError, "line 7: face 3 has 2 vertex indices"),
+    # a face of two vertices is skipped (an edge, not surface), but its indices are still checked
+    "obj-two-vertex-face-bad-index": ("t.obj", TETRA_OBJ.replace("f 1 4 3", "f 1 9").encode(),
+                                      MeshFormatError, "line 7: vertex index 9 is out of range"),
     "stl-truncated": ("t.stl", binary_stl(TETRA_TRIANGLES)[:-7], MeshFormatError, "truncated"),
     "stl-count-too-big": ("c.stl", binary_stl(TETRA_TRIANGLES, count=10**9), MeshFormatError,
                           "says 1000000000 triangles"),

@@ -9,6 +9,7 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from conftest import exact_mass_properties
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
@@ -18,41 +19,6 @@ from massprops import mass as mass_module
 from massprops.errors import ComputationError, DegenerateMeshError, MeshFormatError, UsageError
 from massprops.mass import mass_properties
 from massprops.mesh import Mesh
-
-# --- the exact oracle: every float is a rational, so the integral of a float mesh is exact -------
-
-
-def _as_integers(vertices) -> tuple[list[list[int]], int]:
-    """Coordinates as integers times 2**e (one e for all), exactly."""
-    flat = [float(x) for x in np.asarray(vertices, dtype=np.float64).ravel()]
-    e = min((math.frexp(x)[1] - 53 for x in flat if x != 0.0), default=0)
-    ints = [int(Fraction(x) / Fraction(2) ** e) for x in flat]
-    return [ints[i:i + 3] for i in range(0, len(ints), 3)], e
-
-
-def exact_mass_properties(vertices, faces):
-    """Volume, COM (3) and inertia about the COM (3x3) at unit density, as Fractions, from the
-    signed tetrahedra (0, a, b, c) in integer arithmetic."""
-    pts, e = _as_integers(vertices)
-    s0, s1, s2 = 0, [0, 0, 0], [[0] * 3 for _ in range(3)]
-    for i, j, k in np.asarray(faces).tolist():
-        a, b, c = pts[i], pts[j], pts[k]
-        d = (a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2])
-             + a[2] * (b[0] * c[1] - b[1] * c[0]))
-        s = [a[t] + b[t] + c[t] for t in range(3)]
-        s0 += d
-        for p in range(3):
-            s1[p] += d * s[p]
-            for q in range(3):
-                s2[p][q] += d * (a[p] * a[q] + b[p] * b[q] + c[p] * c[q] + s[p] * s[q])
-    unit = Fraction(2) ** e
-    volume = Fraction(s0, 6) * unit**3
-    com = [Fraction(x, 24) * unit**4 / volume for x in s1]
-    central = [[Fraction(s2[p][q], 120) * unit**5 - volume * com[p] * com[q] for q in range(3)]
-               for p in range(3)]
-    trace = sum(central[p][p] for p in range(3))
-    inertia = [[(trace if p == q else 0) - central[p][q] for q in range(3)] for p in range(3)]
-    return volume, com, inertia
 
 
 def _eigenvalues_below(j, x) -> int | None:

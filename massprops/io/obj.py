@@ -31,7 +31,8 @@ def read_obj(source: Source) -> Mesh:
     vertices becomes k - 2 fan triangles (``polygon_sizes`` records it). Index tokens may be
     ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``; negative indices count back from the latest vertex.
     Extra vertex columns (w, colours) are ignored. ``\\`` continues a line (line numbers in
-    messages then count the joined lines as one).
+    messages then count the joined lines as one). Faces of fewer than 3 vertices and polyline
+    (``l``) lines are skipped, with one note (``Mesh.notes``) giving their counts and first lines.
 
     Returns a Mesh with vertices (n, 3) float64 in file units, faces (m, 3) int64 0-based.
     """
@@ -43,11 +44,29 @@ def read_obj(source: Source) -> Mesh:
     lines = TextLines.from_bytes(data)
     vertex_lines = lines.select(b"v")
     face_lines = lines.select(b"f")
-    validate.require_content(vertex_lines.size, face_lines.size, name)
+    if not (vertex_lines.size and face_lines.size):
+        validate.require_content(vertex_lines.size, face_lines.size, name)
     vertices = _read_vertices(lines, vertex_lines, name)
     flat, sizes = _read_faces(lines, vertex_lines, face_lines, vertices.shape[0], name)
+    # Faces of fewer than 3 vertices and polylines ('l') are edges, not surface: a scene export
+    # may hold a few among its faces, which must not make the whole file fail.
+    short = sizes < 3
+    polylines = lines.select(b"l") if b"l" in data else face_lines[:0]  # memchr-fast filter
+    notes = _skipped_note(face_lines[short], polylines)
+    if short.any():
+        validate.require_content(vertex_lines.size, int(np.count_nonzero(~short)), name)
+        flat, sizes = flat[np.repeat(~short, sizes)], sizes[~short]
     faces, polygon_sizes = fan_triangulate(flat, sizes)
-    return Mesh(vertices, faces, polygon_sizes, name=name)
+    return Mesh(vertices, faces, polygon_sizes, name=name, notes=notes)
+
+
+def _skipped_note(short_faces: np.ndarray, polylines: np.ndarray) -> tuple[str, ...]:
+    """The one warning for skipped edge elements (0-based line indices), or none."""
+    kinds = ((short_faces, "face with fewer than 3 vertices", "faces with fewer than 3 vertices"),
+             (polylines, "polyline ('l') line", "polyline ('l') lines"))
+    parts = [f"{lines.size} {one if lines.size == 1 else many} (first on line {lines[0] + 1})"
+             for lines, one, many in kinds if lines.size]
+    return (f"skipped {' and '.join(parts)}: edges, not surface",) if parts else ()
 
 
 def _read_vertices(lines: TextLines, vertex_lines: np.ndarray, name: str) -> np.ndarray:
@@ -77,11 +96,11 @@ def _read_faces(
     n_vertices: int,
     name: str,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(flat 0-based indices, sizes) of the ``f`` lines' polygons."""
+    """(flat 0-based indices, sizes) of the ``f`` lines' polygons, every index range-checked
+    (also those of faces with fewer than 3 vertices, which the caller skips)."""
     block = lines.gather(face_lines, skip=1)
     sizes = token_counts(block)
     line_numbers = face_lines + 1
-    validate.require_polygon_sizes(sizes, name, lambda i: f"line {line_numbers[i]}")
     raw = _vertex_indices(block, sizes, name, line_numbers)
 
     def token_line(k: int) -> str:
