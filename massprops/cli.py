@@ -15,7 +15,7 @@ from typing import Any
 import click
 
 from massprops import __version__
-from massprops.errors import MassPropsError, UsageError, exit_code
+from massprops.errors import UsageError, error_message, exit_code
 
 UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")
 """The keys of massprops.io.UNITS, written out so that building the CLI does not import the
@@ -37,19 +37,10 @@ def _guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
         return 0
     except KeyboardInterrupt:
         raise
-    except MassPropsError as exc:
+    except Exception as exc:  # ours, a bug or an environment failure: one line, no traceback
         if ctx.obj.get("debug"):
             raise
-        _say_error(str(exc))
-        return exit_code(exc)
-    except Exception as exc:  # a bug or an environment failure: say what, not a traceback
-        if ctx.obj.get("debug"):
-            raise
-        if isinstance(exc, OSError):
-            _say_error(f"{exc.filename or ''}: {exc.strerror or exc}".lstrip(": "))
-        else:
-            _say_error(f"internal error: {type(exc).__name__}: {exc} "
-                       "(run with --debug for details)")
+        _say_error(error_message(exc))
         return exit_code(exc)
 
 
@@ -100,38 +91,181 @@ def cli(ctx: click.Context, debug: bool) -> None:
     ctx.obj["debug"] = debug
 
 
+OUTPUT_FORMATS = ("table", "json", "csv")
+"""inspect --format: human table, one JSON object per line, CSV (massprops.batch.table)."""
+
+_RENAMED = {"total_mass": "mass", "input_format": "format"}
+"""CLI option names that differ from inspect_file's keyword arguments; every other shared mesh
+option reaches inspect_file (and the batch workers) under its own name."""
+
+
 @cli.command()
-@click.argument("meshes", nargs=-1, required=True)
+@click.argument("meshes", nargs=-1)
 @mass_options
-@click.option("--json", "as_json", is_flag=True, help="One JSON object per mesh, one per line.")
+@click.option("--json", "as_json", is_flag=True,
+              help="One JSON object per mesh, one per line (the same as --format json).")
+@click.option("--format", "output_format", type=click.Choice(OUTPUT_FORMATS), default="table",
+              show_default=True,
+              help="table: for people; json: one object per line; csv: a header and one row "
+                   "per mesh (columns in the README).")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,
+              help="Worker processes [default: the cores this process may use]. 1: one "
+                   "process, as before; a small batch runs in one process anyway.")
+@click.option("--recursive", "-r", is_flag=True,
+              help="A directory MESH includes its sub-directories.")
+@click.option("--files-from", metavar="FILE", default=None,
+              help="Also inspect the paths listed in FILE, one per line ('-': standard input).")
+@click.option("-0", "--null", is_flag=True,
+              help="The --files-from list is NUL-separated (as find -print0 writes it).")
+@click.option("--scheduler", metavar="ADDRESS", default=None,
+              help="Run on the Dask cluster of this scheduler (pip install 'massprops[dask]'); "
+                   "workers must see the same paths.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary line.")
 @click.pass_context
-def inspect(ctx: click.Context, meshes: tuple[str, ...], density: float | None,
-            total_mass: float | None, unit: str, allow_open: bool, input_format: str | None,
-            as_json: bool) -> None:
+def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_format: str,
+            jobs: int | None, recursive: bool, files_from: str | None, null: bool,
+            scheduler: str | None, quiet: bool, **mesh_options: Any) -> None:
     """Mass, centre of mass, inertia tensor, principal moments and axes of each MESH.
 
-    MESH is a file (OBJ, STL, .vf/.vtx/.fac, PLY, OFF, ...) or '-' for standard input.
+    MESH is a file (OBJ, STL, .vf/.vtx/.fac, PLY, OFF, ...), '-' for standard input, a
+    directory (the mesh files in it; with --recursive, also below), or a quoted glob pattern
+    ('parts/**/*.stl'). Results come in input order; a file that fails is reported and the
+    others go on; the exit code is the worst.
     """
-    _check_mass_options(density, total_mass)
-    if "-" in meshes and input_format is None:
+    options = {_RENAMED.get(k, k): v for k, v in mesh_options.items()}
+    _check_mass_options(options["density"], options["mass"])
+    if as_json and output_format not in ("table", "json"):
+        raise click.UsageError(f"--json and --format {output_format} contradict; give one")
+    out_format = "json" if as_json else output_format
+    if not meshes and files_from is None:
+        raise click.UsageError("give MESH arguments or --files-from FILE")
+    if "-" in meshes and options["format"] is None:
         raise click.UsageError("reading standard input ('-') needs --input-format")
-    from massprops.analysis import inspect_file
+    if "-" in meshes and files_from == "-":
+        raise click.UsageError("'-' and --files-from - both read standard input; give one")
+    if null and files_from is None:
+        raise click.UsageError("-0/--null describes the --files-from list; give --files-from")
+    if scheduler is not None and jobs is not None:
+        raise click.UsageError("--jobs and --scheduler contradict: the cluster's workers run "
+                               "the batch; give one")
+    from massprops.batch import dask_executor, expand_inputs, inspect_many
+    from massprops.batch.inputs import stands_for_many
 
-    def one(path: str) -> None:
-        source = sys.stdin.buffer if path == "-" else path
-        result = inspect_file(source, format=input_format, unit=unit,
-                              name="<stdin>" if path == "-" else path,
-                              density=density, mass=total_mass, allow_open=allow_open)
-        for w in result.warnings:
-            _say_warning(result.mesh.name, w)
-        if as_json:
-            _emit_json(result.as_dict())
+    inputs = expand_inputs(meshes, recursive=recursive, files_from=files_from, null=null)
+    if files_from is None:  # the whole list is known: the progress bar can count down
+        inputs = list(inputs)
+    summary = not quiet and (sys.stderr.isatty() or files_from is not None
+                             or any(stands_for_many(m) for m in meshes))
+    executor, workers, client = None, None, None
+    if scheduler is not None:
+        executor, workers, client = dask_executor(scheduler)
+    try:
+        batch = inspect_many(inputs, executor, jobs=jobs, workers=workers, **options)
+        code = _report_batch(ctx, batch, out_format, summary, quiet)
+    finally:
+        if client is not None:
+            client.close()
+        from massprops.batch.pool import end_helper_processes
+
+        end_helper_processes()
+    ctx.exit(code)
+
+
+def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool,
+                  quiet: bool) -> int:
+    """Print every record of ``batch`` as it comes; the worst exit code. Ctrl-C: print what
+    was finished, the summary, and let main() exit 130."""
+    import time
+
+    progress = None
+    if not quiet and sys.stderr.isatty():
+        from massprops.report import BatchProgress
+
+        progress = BatchProgress()
+    start = time.monotonic()
+    counts = {"done": 0, "failed": 0, "worst": 0}
+
+    def show(record: Any) -> None:
+        code = _show_record(ctx, record, out_format)
+        counts["failed" if code else "done"] += 1
+        counts["worst"] = max(counts["worst"], code)
+
+    def say_summary(interrupted: bool) -> None:
+        if progress is not None:
+            progress.close()
+        n = counts["done"] + counts["failed"]
+        if not summary or (n < 2 and not interrupted):  # one file: its own lines say it all
+            return
+        elapsed = time.monotonic() - start
+        rate = f"{n / elapsed:.3g} files/s" if elapsed > 0 else "-"
+        of = f" of {batch.total}" if interrupted and batch.total is not None else (
+            f" of {batch.seen}+" if interrupted else "")
+        click.echo(f"massprops: {n}{of} files in {elapsed:.3g} s ({rate}): "
+                   f"{counts['done']} done, {counts['failed']} failed", err=True)
+
+    try:
+        if out_format == "csv":
+            from massprops.batch.table import csv_header
+
+            _echo_text(csv_header())
+        for record in batch:
+            show(record)
+            if progress is not None:
+                progress.update(counts["done"], counts["failed"], batch.total)
+    except KeyboardInterrupt:
+        for record in batch.interrupt():
+            show(record)
+        say_summary(interrupted=True)
+        raise
+    finally:
+        batch.close()
+        if progress is not None:
+            progress.close()
+    say_summary(interrupted=False)
+    return counts["worst"]
+
+
+class RemoteError(Exception):
+    """--debug: an input failed in a worker process; the message is the worker's traceback."""
+
+
+def _show_record(ctx: click.Context, record: Any, out_format: str) -> int:
+    """Print one record (warnings and errors on stderr); its exit code."""
+    error = record.error
+    if error is not None:
+        if ctx.obj.get("debug"):
+            raise error.exception or RemoteError(error.traceback or error.message)
+        _say_error(error.message)
+        if out_format == "csv":
+            from massprops.batch.table import csv_row
+
+            _echo_text(csv_row(record))
+        return error.exit_code
+
+    def emit() -> None:
+        for w in record.warnings:
+            _say_warning(record.file, w)
+        if out_format == "json":
+            _emit_json(record.data)
+        elif out_format == "csv":
+            from massprops.batch.table import csv_row
+
+            _echo_text(csv_row(record))
         else:
             from massprops.report import print_inspection
 
-            print_inspection(result)
+            print_inspection(record.data)
 
-    ctx.exit(_worst(ctx, meshes, one))
+    return _guarded(ctx, emit)
+
+
+def _echo_text(text: str) -> None:
+    """Text to stdout as is; a file name that is not valid UTF-8 (decoded with surrogate
+    escapes) goes out as its original bytes."""
+    try:
+        click.echo(text, nl=False)
+    except UnicodeEncodeError:
+        click.echo(text.encode("utf-8", "surrogateescape"), nl=False)
 
 
 @cli.command()
