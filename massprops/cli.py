@@ -158,7 +158,11 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
                              or any(stands_for_many(m) for m in meshes))
     executor, workers, client = None, None, None
     if scheduler is not None:
-        executor, workers, client = dask_executor(scheduler)
+        try:
+            executor, workers, client = dask_executor(scheduler)
+        except UsageError as exc:  # not installed, or not reachable
+            _say_error(str(exc))
+            ctx.exit(exit_code(exc))
     try:
         batch = inspect_many(inputs, executor, jobs=jobs, workers=workers, **options)
         code = _report_batch(ctx, batch, out_format, summary, quiet)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import sys
-import traceback
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,6 +28,8 @@ class ErrorInfo:
 
     @classmethod
     def of(cls, exc: BaseException, *, keep: bool = False) -> ErrorInfo:
+        import traceback  # only a failure pays for it
+
         text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
         return cls(error_message(exc), exit_code(exc), text, exc if keep else None)
 
