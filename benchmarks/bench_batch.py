@@ -3,7 +3,8 @@ trimesh's loop, side by side in one run.
 
 A dataset is generated into benchmarks/_data/batch (git-ignored; reused when its manifest
 matches): --small meshes of 100-20000 triangles (tori and UV spheres, log-uniform sizes, half
-OBJ, half binary STL, each moved and turned at random) and --large meshes of 100k-1M triangles.
+OBJ with 6 decimals as exporters write them, half binary STL, each moved and turned at random)
+and --large meshes of 100k-1M triangles.
 Every mesh is closed and outward, so every tool computes every file. Three whole processes
 read the same file list:
 
@@ -25,6 +26,7 @@ import argparse
 import json
 import math
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -95,8 +97,9 @@ def shape(triangles: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndar
 
 
 def write_obj(path: Path, pts: np.ndarray, faces: np.ndarray) -> None:
+    """OBJ with 6 decimals, as common exporters (Blender, most CAD tools) write it."""
     with open(path, "w") as f:
-        f.write("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in pts.tolist()))
+        f.write("".join(f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in pts.tolist()))
         f.write("".join(f"f {a} {b} {c}\n" for a, b, c in (faces + 1).tolist()))
 
 
@@ -113,7 +116,7 @@ def write_stl(path: Path, pts: np.ndarray, faces: np.ndarray) -> None:
 def make_dataset(small: int, large: int, seed: int = 12) -> list[Path]:
     """The benchmark's files (generated once per (small, large, seed)), in a stable order."""
     manifest = DATA / "manifest.json"
-    key = {"small": small, "large": large, "seed": seed, "version": 1}
+    key = {"small": small, "large": large, "seed": seed, "version": 2}
     if manifest.exists() and json.loads(manifest.read_text()).get("key") == key:
         return [DATA / name for name in json.loads(manifest.read_text())["files"]]
     DATA.mkdir(parents=True, exist_ok=True)
@@ -136,11 +139,15 @@ def make_dataset(small: int, large: int, seed: int = 12) -> list[Path]:
     return [DATA / name for name in names]
 
 
-def timed(cmd: list[str], out: Path | None = None) -> float:
+def timed(cmd: list[str], out: Path | None = None) -> tuple[float, float]:
+    """(wall seconds, CPU seconds of the whole process tree: user + system, workers included)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     with open(out or os.devnull, "wb") as sink:
         subprocess.run(cmd, check=True, stdout=sink, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - start
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def main() -> None:
@@ -166,24 +173,32 @@ def main() -> None:
             script.write_text(TRIMESH_LOOP)
             runs["trimesh loop"] = [sys.executable, str(script), str(listing)]
         one, many = Path(tmp) / "one.csv", Path(tmp) / "many.csv"
-        timed(runs["massprops --jobs 1"], one)  # warm the page cache and bytecode
+        timed(runs["massprops --jobs 1"], one)  # warm the page cache and bytecode too
         timed(runs[f"massprops --jobs {args.jobs}"], many)
         if one.read_bytes() != many.read_bytes():
             sys.exit("FAIL: the parallel CSV differs from the one-process CSV")
         if not args.no_trimesh:
             _check_volumes(one, files)
         best = {name: math.inf for name in runs}
+        cpu = {name: math.inf for name in runs}
+        load = [os.getloadavg()[0]]
         for _ in range(args.repeat):
             for name, cmd in runs.items():
-                best[name] = min(best[name], timed(cmd))
+                wall, used = timed(cmd)
+                best[name], cpu[name] = min(best[name], wall), min(cpu[name], used)
+        load.append(os.getloadavg()[0])
 
     n = len(files)
     print(f"{n} files ({args.small} small, {args.large} large), {total_mb:.0f} MB; "
-          f"{os.cpu_count()} cores; best of {args.repeat}, whole processes")
+          f"{os.cpu_count()} cores (load average {load[0]:.1f} before, {load[1]:.1f} after: "
+          f"other users' work slows the parallel run most); best of {args.repeat}, whole "
+          "processes")
     for name, t in best.items():
-        print(f"  {name:22s} {t:7.2f} s  {n / t:8.1f} files/s")
+        print(f"  {name:22s} {t:7.2f} s  {n / t:8.1f} files/s   CPU {cpu[name]:6.2f} s")
     one_t, many_t = best["massprops --jobs 1"], best[f"massprops --jobs {args.jobs}"]
-    print(f"--jobs {args.jobs} / one process: {one_t / many_t:.2f}x (target >= 1.8 on 2 cores)")
+    print(f"--jobs {args.jobs} / one process: {one_t / many_t:.2f}x (target >= 1.8 on 2 cores); "
+          f"CPU spent by --jobs {args.jobs} / one process: "
+          f"{cpu[f'massprops --jobs {args.jobs}'] / cpu['massprops --jobs 1']:.2f}x")
     if not args.no_trimesh:
         tri = best["trimesh loop"]
         print(f"--jobs {args.jobs} / trimesh loop: {tri / many_t:.2f}x (target >= 4); "

@@ -6,10 +6,11 @@ a small mesh pays for numpy and the mesh code only (no rich, scipy, trimesh or n
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import json
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 import click
@@ -207,26 +208,74 @@ def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool
         click.echo(f"massprops: {n}{of} files in {elapsed:.3g} s ({rate}): "
                    f"{counts['done']} done, {counts['failed']} failed", err=True)
 
+    ctrl_c = _CtrlC()
     try:
-        if out_format == "csv":
-            from massprops.batch.table import csv_header
+        with ctrl_c.deferred():
+            if out_format == "csv":
+                from massprops.batch.table import csv_header
 
-            _echo_text(csv_header())
-        for record in batch:
-            show(record)
-            if progress is not None:
-                progress.update(counts["done"], counts["failed"], batch.total)
-    except KeyboardInterrupt:
-        for record in batch.interrupt():
-            show(record)
+                _to_stdout(lambda: _echo_text(csv_header()))
+        for record in batch:  # Ctrl-C lands here, while waiting for the next record
+            with ctrl_c.deferred():  # ... never half-way through printing one
+                show(record)
+                if progress is not None:
+                    progress.update(counts["done"], counts["failed"], batch.total)
+    except _StdoutClosed:
+        batch.interrupt()
+        _silence_stdout()
         say_summary(interrupted=True)
+        return max(counts["worst"], 1)  # the output could not be written
+    except KeyboardInterrupt:
+        with ctrl_c.deferred():  # a second Ctrl-C waits until the workers are stopped
+            for record in batch.interrupt():
+                show(record)
+            say_summary(interrupted=True)
         raise
     finally:
         batch.close()
+        ctrl_c.restore()
         if progress is not None:
             progress.close()
     say_summary(interrupted=False)
     return counts["worst"]
+
+
+class _CtrlC:
+    """Ctrl-C (SIGINT) as KeyboardInterrupt, except inside ``deferred()`` blocks, where it is
+    held until the block ends: a record is printed and counted whole or not taken at all."""
+
+    def __init__(self) -> None:
+        import signal
+        import threading
+
+        self.held = self.holding = False
+        self.previous = None
+        if threading.current_thread() is threading.main_thread():
+            self.previous = signal.signal(signal.SIGINT, self._handler)
+
+    def _handler(self, signum: int, frame: Any) -> None:
+        if self.holding:
+            self.held = True
+        else:
+            raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def deferred(self) -> Iterator[None]:
+        self.holding = True
+        try:
+            yield
+        finally:
+            self.holding = False
+        if self.held:
+            self.held = False
+            raise KeyboardInterrupt
+
+    def restore(self) -> None:
+        if self.previous is not None:
+            import signal
+
+            signal.signal(signal.SIGINT, self.previous)
+            self.previous = None
 
 
 class RemoteError(Exception):
@@ -243,24 +292,44 @@ def _show_record(ctx: click.Context, record: Any, out_format: str) -> int:
         if out_format == "csv":
             from massprops.batch.table import csv_row
 
-            _echo_text(csv_row(record))
+            _to_stdout(lambda: _echo_text(csv_row(record)))
         return error.exit_code
 
     def emit() -> None:
         for w in record.warnings:
             _say_warning(record.file, w)
         if out_format == "json":
-            _emit_json(record.data)
+            _to_stdout(lambda: _emit_json(record.data))
         elif out_format == "csv":
             from massprops.batch.table import csv_row
 
-            _echo_text(csv_row(record))
+            _to_stdout(lambda: _echo_text(csv_row(record)))
         else:
             from massprops.report import print_inspection
 
-            print_inspection(record.data)
+            _to_stdout(lambda: print_inspection(record.data))
 
     return _guarded(ctx, emit)
+
+
+class _StdoutClosed(BaseException):
+    """Standard output was closed by its reader (``... | head``): the batch stops (no error
+    line per remaining file, no work for nobody). A BaseException, so _guarded lets it by."""
+
+
+def _to_stdout(write: Callable[[], None]) -> None:
+    try:
+        write()
+    except BrokenPipeError as exc:
+        raise _StdoutClosed from exc
+
+
+def _silence_stdout() -> None:
+    """Point the closed stdout at /dev/null, so that the flush at exit does not fail again."""
+    import os
+
+    with contextlib.suppress(OSError, ValueError, AttributeError):  # no real descriptor
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def _echo_text(text: str) -> None:

@@ -204,7 +204,8 @@ def test_ctrl_c_exits_130_with_what_finished_and_leaves_no_process(tmp_path):
     listing.write_text("".join(p + "\n" for p in paths))
     proc = subprocess.Popen(
         [sys.executable, "-m", "massprops", "inspect", "--json", "--jobs", "2", "--files-from",
-         str(listing)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+         str(listing)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+        bufsize=0)  # unbuffered: readline must not keep bytes that communicate() then misses
     first = proc.stdout.readline()  # the batch is running and has printed
     helpers = descendants(proc.pid)
     os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does: the whole group
@@ -246,3 +247,50 @@ def test_one_small_file_imports_no_pool_and_nothing_heavy():
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     assert res.stderr.strip().splitlines()[-1] == "[]"
+
+
+@pytest.mark.timeout(60)
+def test_closed_stdout_stops_the_batch_quietly(tmp_path):
+    mesh = torus_obj(tmp_path / "t.obj", 60, 40)
+    for k in range(300):
+        os.link(mesh, tmp_path / f"t{k:03d}.obj")
+    res = subprocess.run(f"{sys.executable} -m massprops inspect --json -q {tmp_path} | head -n 2"
+                         "; echo \"status ${PIPESTATUS[0]}\" >&2", shell=True, executable="bash",
+                         capture_output=True, text=True)
+    assert len(res.stdout.splitlines()) == 2
+    assert res.stderr.strip().splitlines() == ["status 1"]  # no error line per remaining file
+
+
+def test_standard_input_joins_a_parallel_batch_in_its_place(run, tmp_path, pool_always):
+    paths = [str(torus_obj(tmp_path / f"t{k}.obj", 10 + k, 6)) for k in range(4)]
+    args = ["inspect", "--json", "--input-format", "obj", paths[0], paths[1], "-", paths[2]]
+    text = (SAMPLES / "cuboid.obj").read_text()
+    one = run(*args, "--jobs", "1", input=text)
+    two = run(*args, "--jobs", "2", input=text)
+    assert pool_always == [2] and two.stdout == one.stdout and two.exit_code == 0
+    assert [o["file"] for o in json_lines(two.stdout)] == [paths[0], paths[1], "<stdin>",
+                                                          paths[2]]
+
+
+@pytest.mark.timeout(90)
+def test_progress_bar_and_summary_on_a_terminal_only(tmp_path):
+    import pty
+
+    mesh = torus_obj(tmp_path / "t.obj", 100, 100)
+    for k in range(80):
+        os.link(mesh, tmp_path / f"t{k:02d}.obj")
+    leader, follower = pty.openpty()
+    proc = subprocess.Popen([sys.executable, "-m", "massprops", "inspect", "--json", "-j", "1",
+                             *sorted(map(str, tmp_path.glob("t??.obj")))],
+                            stdout=subprocess.DEVNULL, stderr=follower)
+    os.close(follower)
+    seen = b""
+    with contextlib.suppress(OSError):  # EIO once the process has closed the terminal
+        while chunk := os.read(leader, 4096):
+            seen += chunk
+    os.close(leader)
+    assert proc.wait(timeout=60) == 0
+    text = seen.decode(errors="replace")
+    assert re.search(r"inspecting .* \d+/80 files · [\d.]+ files/s · \d+:\d\d left", text)
+    assert re.search(r"massprops: 80 files in [\d.]+ s \([\d.e+]+ files/s\): 80 done, 0 failed",
+                     text)

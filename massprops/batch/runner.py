@@ -1,10 +1,11 @@
 """`inspect_many`: tasks out to an executor, records back in input order, every input once.
 
-Scheduling. Chunks (`plan`) are submitted in input order while the window allows: at least two
-tasks per worker, and queued work behind the oldest unfinished task worth at most ``workers``
-times max(WINDOW_S, that task's cost), so a long file at the head does not leave the other
-workers idle, and memory stays bounded whatever the batch size. Records leave in input order:
-the head task's records as soon as it is done.
+Scheduling. Chunks (`plan`) are read ahead in input order while the window allows: work
+behind the oldest unfinished task worth at most ``workers`` times max(WINDOW_S, that task's
+cost), so memory stays bounded whatever the batch size. Of these, IN_FLIGHT_PER_WORKER tasks per
+worker are out on the executor at a time: the first waiting one, or a large file as soon as it
+is in the window (largest first: started late, one worker would finish it alone). Records
+leave in input order, the head task's as soon as it is done; the others keep their results.
 
 Failures of the machinery (not of a file: a bad file is a record with its error) are retried
 so that every input is still reported exactly once. A task whose future failed (a local worker
@@ -34,11 +35,20 @@ from massprops.errors import ComputationError, UsageError
 if TYPE_CHECKING:
     from concurrent.futures import Executor, Future
 
-WINDOW_S = 2.0
-"""Estimated seconds of queued work per worker behind the oldest unfinished task."""
+WINDOW_S = 4.0
+"""Estimated seconds of work per worker read ahead behind the oldest unfinished task (where
+large files are found early; memory: paths and finished records only)."""
 
 MAX_TASKS_PER_WORKER = 64
-"""Hard bound on queued tasks per worker (the cost model may underestimate)."""
+"""Hard bound on tasks read ahead per worker (the cost model may underestimate)."""
+
+IN_FLIGHT_PER_WORKER = 2
+"""Tasks handed to the executor per worker: one running, one ready to start. More would only
+fix the order in the executor's own queue (and be lost work on Ctrl-C)."""
+
+LARGE_TASK_CHUNKS = 4
+"""A task costing this many chunk targets is a large file: it goes out before the tasks ahead
+of it in the window, so that it does not run alone at the end of the batch."""
 
 
 @dataclass(eq=False)
@@ -227,22 +237,40 @@ class Batch(Iterator[MeshResult]):
             chunk = self._lookahead.popleft() if self._lookahead else next(self._chunks, None)
             if chunk is None:
                 self._exhausted = True
-                return
-            slot = _Slot(chunk, self._index_of_next())
-            self._slots.append(slot)
-            if not chunk.local and not self._alone:
-                self._submit(slot)
+                break
+            self._slots.append(_Slot(chunk, self._index_of_next()))
+        self._top_up()
 
     def _index_of_next(self) -> int:
         last = self._slots[-1] if self._slots else None
         return 0 if last is None else last.index + len(last.chunk.inputs)
 
+    def _running(self) -> list[_Slot]:
+        return [s for s in self._slots if s.future is not None and not s.future.done()]
+
+    def _top_up(self) -> None:
+        """Keep IN_FLIGHT_PER_WORKER tasks per worker out; the next is the first waiting task,
+        or the costliest one in the window if that is a large file (started early, it does
+        not leave one worker alone with it at the end)."""
+        if self._alone:
+            return
+        free = IN_FLIGHT_PER_WORKER * self._workers - len(self._running())
+        while free > 0:
+            waiting = [s for s in self._slots if s.future is None and s.results is None
+                       and not s.chunk.local and not s.alone]
+            if not waiting:
+                return
+            largest = max(waiting, key=lambda s: s.chunk.cost)
+            large = largest.chunk.cost >= LARGE_TASK_CHUNKS * self._chunk_s
+            self._submit(largest if large else waiting[0])
+            free -= 1
+
     def _submit(self, slot: _Slot) -> None:
         from concurrent.futures import BrokenExecutor, Future
 
-        args = (self._cwd, slot.chunk.inputs, self._options, self._own_pool, slot.index)
         from massprops.batch.worker import run_chunk
 
+        args = (self._cwd, slot.chunk.inputs, self._options, self._own_pool, slot.index)
         try:
             slot.future = self._executor.submit(run_chunk, *args)
         except BrokenExecutor:
@@ -265,7 +293,8 @@ class Batch(Iterator[MeshResult]):
         if slot.alone and slot.future is None:
             self._run_alone(slot)
         elif slot.future is None:
-            self._submit(slot)
+            self._submit(slot)  # the head runs now, whatever else is out
+        self._wait_for(slot)
         error = _failure(slot.future)
         if error is None:
             self._end_alone(slot)
@@ -275,18 +304,22 @@ class Batch(Iterator[MeshResult]):
         self._retry(slot, error)
         return None
 
+    def _wait_for(self, slot: _Slot) -> None:
+        """Wait until ``slot`` is done, handing out more tasks as others finish."""
+        from concurrent.futures import FIRST_COMPLETED, wait
+
+        while not slot.future.done():
+            self._top_up()
+            wait([s.future for s in self._running()], return_when=FIRST_COMPLETED)
+
     def _retry(self, slot: _Slot, error: BaseException) -> None:
         """Split a failed task into single files, or isolate a single file, or give up on it."""
         position = self._slots.index(slot)
-        if len(slot.chunk.inputs) > 1:
-            singles = [
-                _Slot(plan.Chunk([path], plan.estimate(path)), slot.index + k)
-                for k, path in enumerate(slot.chunk.inputs)]
+        if len(slot.chunk.inputs) > 1:  # each file waits for its turn (see _top_up)
             self._slots.remove(slot)
-            for k, single in enumerate(singles):
+            for k, path in enumerate(slot.chunk.inputs):
+                single = _Slot(plan.Chunk([path], plan.estimate(path)), slot.index + k)
                 self._slots.insert(position + k, single)
-                if not self._alone:
-                    self._submit(single)
             return
         if not slot.alone:
             slot.alone, slot.future = True, None
@@ -303,17 +336,12 @@ class Batch(Iterator[MeshResult]):
         from concurrent.futures import wait
 
         self._alone = True
-        wait([s.future for s in self._slots if s is not slot and s.future is not None])
+        wait([s.future for s in self._running() if s is not slot])
         self._submit(slot)  # on a pool broken meanwhile, _submit replaces it first
 
     def _end_alone(self, slot: _Slot) -> None:
-        if not (slot.alone and self._alone):
-            return
-        self._alone = False
-        for other in self._slots:  # what waited while the suspect ran alone
-            if other is not slot and other.future is None and not other.chunk.local \
-                    and not other.alone:
-                self._submit(other)
+        if slot.alone and self._alone:
+            self._alone = False  # what waited while the suspect ran alone goes out again
 
     def _replace_pool(self, keep: _Slot | None = None) -> None:
         """A local worker died: the pool is broken. Start a new one and resubmit every task
@@ -323,13 +351,10 @@ class Batch(Iterator[MeshResult]):
         old = self._executor
         stop_pool(old)  # also waits until the old pool has failed or cancelled all its tasks
         self._new_pool()
-        for slot in self._slots:
-            if slot is keep:
-                continue
-            if slot.pool is old and slot.future is not None and _failure(slot.future) is not None:
+        for slot in self._slots:  # back to waiting: _top_up hands them out again
+            if slot is not keep and slot.pool is old and slot.future is not None \
+                    and _failure(slot.future) is not None:
                 slot.future = None
-                if not slot.alone and not self._alone:
-                    self._submit(slot)
 
     # --- stopping ------------------------------------------------------------------------------
     def interrupt(self) -> list[MeshResult]:
