@@ -294,3 +294,15 @@ def test_progress_bar_and_summary_on_a_terminal_only(tmp_path):
     assert re.search(r"inspecting .* \d+/80 files · [\d.]+ files/s · \d+:\d\d left", text)
     assert re.search(r"massprops: 80 files in [\d.]+ s \([\d.e+]+ files/s\): 80 done, 0 failed",
                      text)
+
+
+def test_debug_raises_the_error_with_its_traceback(run, tmp_path, pool_always):
+    from massprops.cli import RemoteError
+    from massprops.errors import MeshFormatError
+
+    paths = [torus_obj(tmp_path / "a.obj"), tmp_path / "b.obj", torus_obj(tmp_path / "c.obj")]
+    paths[1].write_bytes(b"\x00 not a mesh")
+    with pytest.raises(MeshFormatError):  # one process: the exception itself, as before
+        run("--debug", "inspect", "--json", "--jobs", "1", *paths)
+    with pytest.raises(RemoteError, match=r"(?s)Traceback.*MeshFormatError: .*b\.obj"):
+        run("--debug", "inspect", "--json", "--jobs", "2", *paths)  # a worker's, as text

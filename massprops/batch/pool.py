@@ -27,7 +27,7 @@ def local_pool(jobs: int) -> ProcessPoolExecutor:
     """``jobs`` worker processes that ignore Ctrl-C (see `worker.init_local_worker`).
 
     Start method: a fork server where the platform has one. Its workers fork from a clean
-    server that imported massprops once (cheap per worker, ~0.2 s once per batch), never from
+    server that imported numpy and massprops once (~0.2 s once per batch), never from
     this process: forking a process with threads (numpy's BLAS, a caller's) can deadlock, and a
     fork would copy unflushed output. Elsewhere (Windows) fresh interpreters (spawn)."""
     import multiprocessing
@@ -35,7 +35,8 @@ def local_pool(jobs: int) -> ProcessPoolExecutor:
 
     if "forkserver" in multiprocessing.get_all_start_methods():
         context = multiprocessing.get_context("forkserver")
-        context.set_forkserver_preload(["massprops.batch.worker"])
+        # numpy and the mesh code imported once in the server, not again in every worker
+        context.set_forkserver_preload(["massprops.batch.worker", "massprops.analysis"])
     else:
         context = multiprocessing.get_context("spawn")
     from massprops.batch.worker import init_local_worker
