@@ -17,7 +17,11 @@ the script prints files/s of each and the ratios (targets: jobs N / one process 
 N = 2 on a 2-core machine; jobs N / trimesh >= 4). It also checks that the parallel CSV equals
 the one-process CSV byte for byte, and that massprops and trimesh agree on every volume.
 
-    python benchmarks/bench_batch.py [--small 1000] [--large 8] [--jobs 2] [--repeat 3]
+With --dask W the same batch also runs on a local Dask cluster of W one-thread worker processes
+(`--scheduler`), checked against the one-process CSV, and the script prints files/s per worker:
+the rate the README extrapolates from.
+
+    python benchmarks/bench_batch.py [--small 1000] [--large 8] [--jobs 2] [--repeat 3] [--dask W]
 """
 
 from __future__ import annotations
@@ -157,6 +161,9 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-trimesh", action="store_true")
+    parser.add_argument("--dask", type=int, default=0, metavar="W",
+                        help="also run on a local Dask cluster of W one-thread workers "
+                             "(--scheduler; needs massprops[dask]) and print files/s per worker")
     args = parser.parse_args()
 
     files = make_dataset(args.small, args.large)
@@ -186,6 +193,8 @@ def main() -> None:
             for name, cmd in runs.items():
                 wall, used = timed(cmd)
                 best[name], cpu[name] = min(best[name], wall), min(cpu[name], used)
+        if args.dask:
+            best[f"dask, {args.dask} workers"] = _dask_best(base, args.dask, args.repeat, one)
         load.append(os.getloadavg()[0])
 
     n = len(files)
@@ -194,7 +203,12 @@ def main() -> None:
           f"other users' work slows the parallel run most); best of {args.repeat}, whole "
           "processes")
     for name, t in best.items():
-        print(f"  {name:22s} {t:7.2f} s  {n / t:8.1f} files/s   CPU {cpu[name]:6.2f} s")
+        used = f"   CPU {cpu[name]:6.2f} s" if name in cpu else ""
+        print(f"  {name:22s} {t:7.2f} s  {n / t:8.1f} files/s{used}")
+    if args.dask:
+        t = best[f"dask, {args.dask} workers"]
+        print(f"dask: {n / t / args.dask:.1f} files/s per worker (one thread each; the "
+              "scheduler, client and workers all on this machine)")
     one_t, many_t = best["massprops --jobs 1"], best[f"massprops --jobs {args.jobs}"]
     print(f"--jobs {args.jobs} / one process: {one_t / many_t:.2f}x (target >= 1.8 on 2 cores); "
           f"CPU spent by --jobs {args.jobs} / one process: "
@@ -203,6 +217,24 @@ def main() -> None:
         tri = best["trimesh loop"]
         print(f"--jobs {args.jobs} / trimesh loop: {tri / many_t:.2f}x (target >= 4); "
               f"one process / trimesh loop: {tri / one_t:.2f}x")
+
+
+def _dask_best(base: list[str], workers: int, repeat: int, reference: Path) -> float:
+    """Best wall time of the batch on a local Dask cluster; its CSV must equal ``reference``.
+    The workers start with a 128 MiB malloc trim threshold, as the README's recipe says (dask's
+    own 64 KiB costs massprops 35-45 % CPU)."""
+    from distributed import LocalCluster
+
+    os.environ["MALLOC_TRIM_THRESHOLD_"] = str(128 * 2**20)  # read by the nanny at spawn
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                      dashboard_address=":0") as cluster:
+        cmd = [*base, "--scheduler", cluster.scheduler_address]
+        with tempfile.TemporaryDirectory() as tmp:
+            out = Path(tmp) / "dask.csv"
+            timed(cmd, out)
+            if out.read_bytes() != reference.read_bytes():
+                sys.exit("FAIL: the Dask CSV differs from the one-process CSV")
+        return min(timed(cmd)[0] for _ in range(repeat))
 
 
 def _check_volumes(csv_path: Path, files: list[Path]) -> None:

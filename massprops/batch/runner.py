@@ -2,7 +2,8 @@
 
 Scheduling. Chunks (`plan`) are read ahead in input order while the window allows: work
 behind the oldest unfinished task worth at most ``workers`` times max(WINDOW_S, that task's
-cost), so memory stays bounded whatever the batch size. Of these, IN_FLIGHT_PER_WORKER tasks per
+cost, twice the time it has run), so memory stays bounded whatever the batch size and a long
+head does not leave the other workers idle. Of these, IN_FLIGHT_PER_WORKER tasks per
 worker are out on the executor at a time: the first waiting one, or a large file as soon as it
 is in the window (largest first: started late, one worker would finish it alone). Records
 leave in input order, the head task's as soon as it is done; the others keep their results.
@@ -22,6 +23,7 @@ input order.
 from __future__ import annotations
 
 import os
+import time
 from collections import deque
 from collections.abc import Iterable, Iterator, Sized
 from dataclasses import dataclass
@@ -61,6 +63,7 @@ class _Slot:
     results: list[MeshResult] | None = None  # settled here (local inputs, a file given up on)
     alone: bool = False  # a suspect: run with nothing else in flight
     pool: Any = None  # the executor its future belongs to
+    started: float | None = None  # time.monotonic() when it was handed out
 
 
 def inspect_many(paths: Iterable, executor: Executor | None = None, *, jobs: int | None = None,
@@ -228,9 +231,11 @@ class Batch(Iterator[MeshResult]):
             return True
         if tasks >= MAX_TASKS_PER_WORKER * self._workers:
             return False
-        head = self._slots[0].chunk.cost
-        queued = sum(s.chunk.cost for s in self._slots) - head
-        return queued < self._workers * max(WINDOW_S, head)
+        head = self._slots[0]
+        # a head running longer than estimated (the model is rough) earns a longer window
+        running = time.monotonic() - head.started if head.started is not None else 0.0
+        queued = sum(s.chunk.cost for s in self._slots) - head.chunk.cost
+        return queued < self._workers * max(WINDOW_S, head.chunk.cost, 2 * running)
 
     def _fill(self) -> None:
         while not self._exhausted and self._room():
@@ -281,7 +286,7 @@ class Batch(Iterator[MeshResult]):
         except Exception as exc:  # shut down, or cannot start workers: the task fails below
             slot.future = Future()
             slot.future.set_exception(exc)
-        slot.pool = self._executor
+        slot.pool, slot.started = self._executor, time.monotonic()
 
     # --- finishing the head --------------------------------------------------------------------
     def _settle(self, slot: _Slot) -> list[MeshResult] | None:
@@ -309,7 +314,7 @@ class Batch(Iterator[MeshResult]):
         from concurrent.futures import FIRST_COMPLETED, wait
 
         while not slot.future.done():
-            self._top_up()
+            self._fill()  # reads on while the head runs long, and hands out tasks
             wait([s.future for s in self._running()], return_when=FIRST_COMPLETED)
 
     def _retry(self, slot: _Slot, error: BaseException) -> None:
