@@ -279,7 +279,7 @@ def test_interrupt_returns_what_finished_in_order_and_stops_the_workers(tmp_path
 
 def test_unknown_option_and_bad_jobs_are_refused():
     with pytest.raises(TypeError, match="densty"):
-        inspect_many(["a.obj"], densty=2.0)
+        next(inspect_many(["a.obj"], densty=2.0))
     with pytest.raises(ValueError, match="at least 1"):
         inspect_many(["a.obj"], jobs=0)
 

@@ -34,9 +34,12 @@ def local_pool(jobs: int) -> ProcessPoolExecutor:
     from concurrent.futures import ProcessPoolExecutor
 
     if "forkserver" in multiprocessing.get_all_start_methods():
+        from multiprocessing import forkserver
+
         context = multiprocessing.get_context("forkserver")
         # numpy and the mesh code imported once in the server, not again in every worker
         context.set_forkserver_preload(["massprops.batch.worker", "massprops.analysis"])
+        forkserver.ensure_running()  # boots in the background until the first worker is due
     else:
         context = multiprocessing.get_context("spawn")
     from massprops.batch.worker import init_local_worker

@@ -85,12 +85,13 @@ def inspect_many(paths: Iterable, executor: Executor | None = None, *, jobs: int
     options : keyword arguments of `massprops.analysis.inspect_file` (``unit``, ``density``,
         ``mass``, ``allow_open``, ``format``, ...), the same for every file.
 
-    Raises UsageError for jobs < 1 and TypeError for an option inspect_file does not take.
-    Use the Batch as a context manager (or call ``close``) when stopping before the end.
+    Raises UsageError for jobs < 1; the first record raises TypeError for an option
+    inspect_file does not take (checked once a local pool is booting: checking imports numpy,
+    which then overlaps the pool's start). Use the Batch as a context manager (or call
+    ``close``) when stopping before the end.
     """
     if jobs is not None and jobs < 1:
         raise UsageError(f"--jobs must be at least 1, got {jobs}")
-    _check_options(options)
     return Batch(paths, executor, jobs, options, workers, chunk_s)
 
 
@@ -179,6 +180,7 @@ class Batch(Iterator[MeshResult]):
     # --- start: this process, a local pool, or the caller's executor ---------------------------
     def _start(self) -> None:
         if self._executor is None and self._jobs == 1:
+            _check_options(self._options)
             self._run_here(plan.chunks(self._counted(), 0.0, single=True))
             return
         local_pool = self._executor is None
@@ -197,12 +199,14 @@ class Batch(Iterator[MeshResult]):
                 work += chunk.cost
                 tasks += not chunk.local
             if not more:  # all read: a pool would cost more than it saves
+                _check_options(self._options)
                 self._run_here(iter(self._lookahead))
                 return
             self._workers = self._jobs
-            self._new_pool()
+            self._new_pool()  # its fork server boots meanwhile
         elif self._workers is None:
             self._workers = getattr(self._executor, "_max_workers", None) or 8
+        _check_options(self._options)
         self.parallel = True
 
     def _counted(self) -> Iterator:
