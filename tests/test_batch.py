@@ -232,8 +232,11 @@ def test_local_pool_gives_the_records_of_one_process(tmp_path, monkeypatch):
 
 @pytest.mark.timeout(90)
 def test_killed_local_worker_is_replaced_and_every_file_reported_once(tmp_path, monkeypatch):
-    paths = [str(torus_obj(tmp_path / f"t{k:03d}.obj", 100, 100, shift=(k, 0, 0)))
-             for k in range(30)]
+    mesh = torus_obj(tmp_path / "t.obj", 100, 100)
+    paths = []
+    for k in range(30):  # one mesh under many names: a long batch, written once
+        os.link(mesh, tmp_path / f"t{k:03d}.obj")
+        paths.append(str(tmp_path / f"t{k:03d}.obj"))
     with _pool_batch(paths, monkeypatch, chunk_s=0.0) as batch:
         records = [next(batch)]
         workers = {p for p in descendants(os.getpid()) if _is_pool_worker(p)}
@@ -259,7 +262,11 @@ def _is_pool_worker(pid: int) -> bool:
 
 @pytest.mark.timeout(60)
 def test_interrupt_returns_what_finished_in_order_and_stops_the_workers(tmp_path, monkeypatch):
-    paths = [str(torus_obj(tmp_path / f"t{k:03d}.obj", 80, 40)) for k in range(60)]
+    mesh = torus_obj(tmp_path / "t.obj", 80, 40)
+    paths = []
+    for k in range(60):
+        os.link(mesh, tmp_path / f"t{k:03d}.obj")
+        paths.append(str(tmp_path / f"t{k:03d}.obj"))
     batch = _pool_batch(paths, monkeypatch, chunk_s=0.0)
     first = next(batch)
     time.sleep(0.3)
