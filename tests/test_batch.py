@@ -364,3 +364,26 @@ def test_csv_float32_source_has_input_error_bars(tmp_path):
     (row,) = _rows(inspect_many([str(binary_stl_box(tmp_path / "b.stl"))], jobs=1))
     assert float(row["volume_err_input"]) > 0 and math.isfinite(float(row["I3_err_input"]))
     assert np.isclose(float(row["volume"]), 6.0, rtol=1e-6)
+
+
+class RecordingExecutor(ThreadPoolExecutor):
+    """One thread; records the batch index of each task in the order it was handed out."""
+
+    def __init__(self):
+        super().__init__(max_workers=1)
+        self.order: list[int] = []
+
+    def submit(self, fn, *args, **kwargs):
+        self.order.append(args[-1])
+        return super().submit(fn, *args, **kwargs)
+
+
+def test_a_large_file_goes_out_first_and_its_record_still_in_place(tmp_path):
+    small = [str(box_vf(tmp_path / f"b{k:02d}.vf", size=(1.0 + k, 1.0, 1.0))) for k in range(12)]
+    large = str(torus_obj(tmp_path / "large.obj", 120, 60))  # costs > 4 tasks of small files
+    paths = [*small, large]
+    with RecordingExecutor() as executor:
+        records = list(inspect_many(paths, executor, workers=1,
+                                    chunk_s=5 * plan.estimate(small[0])))  # 5 small per task
+    assert executor.order[0] == len(small)  # the large file was handed out first ...
+    assert [outcome(r) for r in records] == [reference(p) for p in paths]  # ... printed last
