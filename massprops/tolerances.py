@@ -27,3 +27,11 @@ MIN_VOLUME_TO_ERROR = 100.0
 nothing we can resolve (flat, or inside-out halves cancelling) and is refused as degenerate,
 rather than reported as 0, a random sign or NaN. A bound-based test, unlike a fraction of the
 bounding box, accepts a needle of aspect 1e-6 lying along the box diagonal."""
+
+INERTIA_VALIDITY_RTOL = 1e-12
+"""A stated inertia tensor counts as physically valid when it is symmetric, its smallest principal
+moment is positive, and each principal moment is at most the sum of the other two, each within
+this fraction of the largest moment. Writers print floats in repr, so a tensor massprops wrote
+comes back exact; 1e-12 leaves room for a tensor that was rounded to ~12 digits by another tool
+(a thin rod or disc sits exactly on the triangle inequality's edge) while a placeholder that
+breaks it does so by percent."""
