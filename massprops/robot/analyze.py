@@ -169,6 +169,7 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
     for g in link.geometries:
         if g.problem:
             return skipped(g.problem, True)
+    warnings.extend(g.warning for g in link.geometries if g.warning)
     parts = []
     for g in link.geometries:
         try:

@@ -213,19 +213,28 @@ class _Walker:
             if size.size < need[kind] or np.any(size[:need[kind]] <= 0):
                 raise v.error(node, f"type {kind} needs {need[kind]} positive size value(s), "
                                     f"got size={a.get('size', '')!r}")
-            s = size[:need[kind]]
-            dims = {"sphere": (s[0],), "capsule": (s[0], 2 * s[1]),
-                    "cylinder": (s[0], 2 * s[1]), "box": tuple(2 * s),
-                    "ellipsoid": tuple(s)}[kind]
-            return Geometry(kind, dims=tuple(float(d) for d in dims), **common)
+            s = [float(x) for x in size[:need[kind]]]
+            if kind in ("capsule", "cylinder"):    # radius, half-length -> full length
+                s[1] *= 2
+            elif kind == "box":                    # half edges -> edges
+                s = [2 * x for x in s]
+            return Geometry(kind, dims=tuple(s), **common)
         if kind == "mesh":
             name = a.get("mesh")
             if name not in self.meshes:
                 raise v.error(node, f"mesh={name!r}: no <mesh> asset of that name")
             mesh = self.meshes[name]
+            warning = None
+            if mesh["inertia"] == "shell":
+                mesh["problem"] = (f"<mesh name={name!r} inertia=\"shell\">: a hollow shell is "
+                                   "not supported; massprops integrates solids")
+            elif mesh["inertia"] != "exact":
+                warning = (f"mesh {name!r}: MuJoCo's mesh inertia {mesh['inertia']!r} integrates "
+                           "the convex hull; massprops the mesh itself (add inertia=\"exact\" "
+                           "to the <mesh> to make MuJoCo agree on a non-convex mesh)")
             return Geometry("mesh", path=mesh["path"], uri=mesh["uri"], scale=mesh["scale"],
                             problem=mesh["problem"], vertices=mesh["vertices"],
-                            faces=mesh["faces"], **common)
+                            faces=mesh["faces"], warning=warning, **common)
         return Geometry(kind, problem=f"geom type {kind!r} (line {node.line}) has no volume "
                                       "massprops can integrate", **common)
 
@@ -296,7 +305,7 @@ def _meshes(root: Node, defaults: _Defaults, compiler: _Compiler, v: Values, pat
             scale = v.numbers(node, a["scale"], "scale=", 3, 'scale="1 1 1"') if "scale" in a \
                 else np.ones(3)
             entry = {"uri": file, "scale": scale, "path": None, "problem": None,
-                     "vertices": None, "faces": None}
+                     "vertices": None, "faces": None, "inertia": a.get("inertia", "legacy")}
             if "vertex" in a and "face" in a:
                 counts = [len(a[k].split()) for k in ("vertex", "face")]
                 if counts[0] % 3 or counts[1] % 3:

@@ -46,6 +46,7 @@ class Geometry:
     problem : why this geometry cannot be integrated (an unresolved URI, an unsupported kind), or
         None. A link with a problem is skipped and counted as an input error.
     vertices, faces : an inline mesh (MJCF ``<mesh vertex= face=>``), else None.
+    warning : a remark about how a simulator treats it (not an error), or None.
     node : the element it came from (line numbers).
     """
 
@@ -62,6 +63,7 @@ class Geometry:
     problem: str | None = None
     vertices: np.ndarray | None = None
     faces: np.ndarray | None = None
+    warning: str | None = None
 
 
 @dataclass(frozen=True, eq=False)
