@@ -195,7 +195,8 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
                            "(kg/m³)", False)
     computed = combine(parts, masses, total)
     if stated is None:
-        warnings.append("no stated inertial: nothing to compare")
+        if model.format != "mjcf":  # an MJCF body without one gets MuJoCo's sum over its geoms
+            warnings.append("no stated inertial: nothing to compare")
         comparison = None
     else:
         comparison = compare(stated, computed)
