@@ -30,8 +30,9 @@ class Part:
     """One geometry at unit density, placed in the link frame.
 
     volume : m³. center : (3,) m, link frame. inertia : (3, 3) m⁵ (kg·m² per kg/m³) about
-    ``center``, link axes. lower, upper : (3,) m, the axis-aligned box around it in the link
-    frame. warnings : what the mesh health checks said.
+    ``center``, link axes. lower, upper : (3,) m, an axis-aligned box around it in the link
+    frame: tight for primitives; for a mesh, the box around its own bounding box turned into
+    the link frame (tight unless the pose turns it). warnings : what the health checks said.
     """
 
     volume: float
@@ -107,9 +108,12 @@ def integrate_geometry(geom: Geometry, meshes: MeshCache) -> Part:
     if geom.kind == "mesh":
         mesh, result = meshes.get(geom)
         p = result.properties
-        placed = mesh.vertices @ a.T
+        # the box around the mesh's own bounding box turned into the link frame: 8 corners
+        # instead of every vertex (a (n, 3) @ (3, 3) product costs more than the health checks)
+        lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
+        centre, half = a @ ((lo + hi) / 2) + t, np.abs(a) @ ((hi - lo) / 2)
         return Part(p.volume, a @ p.center_of_mass + t, rotate_inertia(p.inertia, a),
-                    placed.min(axis=0) + t, placed.max(axis=0) + t, tuple(result.warnings))
+                    centre - half, centre + half, tuple(result.warnings))
     solid = PRIMITIVES[geom.kind](*geom.dims)
     half = solid.half_extents(a)
     return Part(solid.volume, np.asarray(t, dtype=np.float64), rotate_inertia(solid.inertia, a),
