@@ -401,3 +401,21 @@ def test_no_stated_mass_needs_density(run, tmp_path):
     (row,) = json_lines(res.stdout)
     assert res.exit_code == 0 and row["computed"]["mass"] == pytest.approx(
         1000 * 4 / 3 * math.pi / 8, rel=1e-15)
+
+
+def test_gripper_agrees_with_mujoco_when_installed():
+    """MuJoCo's own compiler as a second opinion on the MJCF rules (skipped without mujoco)."""
+    mujoco = pytest.importorskip("mujoco")
+    from massprops.rotation import quat_to_matrix
+
+    model = mujoco.MjModel.from_xml_path(str(GRIPPER))
+    for name, r in links_of(GRIPPER).items():
+        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+        a = quat_to_matrix(model.body_iquat[b])
+        j = a @ np.diag(model.body_inertia[b]) @ a.T
+        if r.link.stated is None:  # MuJoCo computes these from the geoms, as massprops does
+            assert r.computed.mass == pytest.approx(model.body_mass[b], rel=1e-14)
+            assert close(r.computed.center_of_mass, model.body_ipos[b], 1e-14, scale=0.1)
+            assert close(r.computed.inertia, j, 1e-12)
+        else:  # MuJoCo takes the stated inertial: 6 digits of the computed one
+            assert close(r.computed.inertia, j, 1e-5)
