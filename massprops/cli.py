@@ -72,6 +72,15 @@ def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -
     return value
 
 
+def _non_negative(ctx: click.Context, param: click.Parameter,
+                  value: float | None) -> float | None:
+    import math
+
+    if value is not None and not (math.isfinite(value) and value >= 0):
+        raise click.BadParameter(f"must be a finite number >= 0, got {value!r}")
+    return value
+
+
 def mass_options(f: Callable) -> Callable:
     """--density / --mass / --unit / --allow-open / --input-format, shared by inspect and align."""
     for opt in reversed([
@@ -163,6 +172,7 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], density: float | None,
 @click.argument("description", metavar="FILE")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per link, one per line.")
 @click.option("--check", "rtol", type=float, default=None, metavar="RTOL",
+              callback=_non_negative,
               help="Exit 4 if any link's stated inertial differs from its geometry by more than "
                    "RTOL (mass, COM / link size, inertia in the 2-norm; all relative).")
 @click.option("--write", "output_path", default=None, metavar="OUT",

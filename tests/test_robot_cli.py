@@ -122,3 +122,12 @@ def test_inspect_format_urdf_imports_only_the_writers():
     robot = {m for m in mods if m.startswith("massprops.robot")}
     assert robot == {"massprops.robot", "massprops.robot.elements"}
     assert not {m for m in mods if m.startswith(("xml", "pyexpat", "lxml", "rich"))}
+
+
+@pytest.mark.parametrize("args", [["--check", "-1"], ["--check", "nan"], ["--density", "0"],
+                                  ["--from", "both"]])
+def test_model_usage_errors_exit_2(run, args):
+    from test_robot_models import ARM
+
+    res = run("model", *args, ARM)
+    assert res.exit_code == 2 and res.stdout == ""
