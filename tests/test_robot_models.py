@@ -419,3 +419,33 @@ def test_gripper_agrees_with_mujoco_when_installed():
             assert close(r.computed.inertia, j, 1e-12)
         else:  # MuJoCo takes the stated inertial: 6 digits of the computed one
             assert close(r.computed.inertia, j, 1e-5)
+
+
+def test_mirrored_mesh_keeps_its_volume_and_mirrors_its_com(tmp_path):
+    """scale "-1 1 1" turns the surface inside out; the faces are reversed, not refused."""
+    shutil.copy(ROBOTS / "arm_description" / "meshes" / "box_mm.obj", tmp_path / "b.obj")
+    p = tmp_path / "r.urdf"
+    p.write_text('<robot name="r"><link name="a"><collision><geometry><mesh filename="b.obj" '
+                 'scale="-0.001 0.001 0.001"/></geometry></collision></link></robot>')
+    c = links_of(p, density=1.0)["a"].computed
+    assert c.volume == pytest.approx(0.1 * 0.2 * 0.4, rel=1e-14)
+    assert close(c.center_of_mass, [-0.05, 0.1, 0.2], 1e-15, scale=1.0)
+    assert close(c.inertia, box_j(c.mass, 0.1, 0.2, 0.4), 1e-14)
+
+
+def test_write_keeps_crlf_and_comments(run, tmp_path):
+    src = tmp_path / "r.urdf"
+    src.write_bytes(b'<robot name="r">\r\n  <!-- keep -->\r\n  <link name="a">\r\n    <inertial>'
+                    b'<mass value="2"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/>'
+                    b'</inertial>\r\n    <collision><geometry><sphere radius="0.5"/></geometry>'
+                    b"</collision>\r\n  </link>\r\n</robot>\r\n")
+    out = tmp_path / "o.urdf"
+    assert run("model", "--write", out, src).exit_code == 0
+    data = out.read_bytes()
+    assert b"\n" not in data.replace(b"\r\n", b"")
+    assert data.startswith(b'<robot name="r">\r\n  <!-- keep -->\r\n  <link name="a">\r\n    '
+                           b"<inertial>\r\n      <origin")
+    assert data.endswith(b"</inertial>\r\n    <collision><geometry><sphere radius=\"0.5\"/>"
+                         b"</geometry></collision>\r\n  </link>\r\n</robot>\r\n")
+    (row,) = json_lines(run("model", "--json", out).stdout)
+    assert close(row["stated"]["inertia"], np.eye(3) * 0.4 * 2 * 0.25, 1e-15)
