@@ -21,6 +21,12 @@ UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")
 """The keys of massprops.io.UNITS, written out so that building the CLI does not import the
 readers (tests/test_cli.py checks the two agree)."""
 
+ELEMENT_FORMATS = ("urdf", "sdf", "mjcf")
+"""The keys of massprops.robot.elements.WRITERS, written out so that ``inspect`` never imports
+the robot package to build its options (tests/test_robot_cli.py checks the two agree)."""
+
+INSPECT_FORMATS = ("table", "json", *ELEMENT_FORMATS)
+
 
 def _say_error(message: str) -> None:
     click.echo(f"massprops: error: {message}", err=True)
@@ -66,6 +72,15 @@ def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -
     return value
 
 
+def _non_negative(ctx: click.Context, param: click.Parameter,
+                  value: float | None) -> float | None:
+    import math
+
+    if value is not None and not (math.isfinite(value) and value >= 0):
+        raise click.BadParameter(f"must be a finite number >= 0, got {value!r}")
+    return value
+
+
 def mass_options(f: Callable) -> Callable:
     """--density / --mass / --unit / --allow-open / --input-format, shared by inspect and align."""
     for opt in reversed([
@@ -104,10 +119,16 @@ def cli(ctx: click.Context, debug: bool) -> None:
 @click.argument("meshes", nargs=-1, required=True)
 @mass_options
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per mesh, one per line.")
+@click.option("--format", "output_format", type=click.Choice(INSPECT_FORMATS), default="table",
+              show_default=True,
+              help="json = --json; urdf/sdf/mjcf print the format's <inertial> element per mesh "
+                   "(about the COM, mesh axes, round-trip digits).")
+@click.option("--principal", is_flag=True,
+              help="With --format mjcf: quat + diaginertia instead of fullinertia.")
 @click.pass_context
 def inspect(ctx: click.Context, meshes: tuple[str, ...], density: float | None,
             total_mass: float | None, unit: str, allow_open: bool, input_format: str | None,
-            as_json: bool) -> None:
+            as_json: bool, output_format: str, principal: bool) -> None:
     """Mass, centre of mass, inertia tensor, principal moments and axes of each MESH.
 
     MESH is a file (OBJ, STL, .vf/.vtx/.fac, PLY, OFF, ...) or '-' for standard input.
@@ -115,6 +136,12 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], density: float | None,
     _check_mass_options(density, total_mass)
     if "-" in meshes and input_format is None:
         raise click.UsageError("reading standard input ('-') needs --input-format")
+    if as_json and output_format not in ("table", "json"):
+        raise click.UsageError(f"--json is --format json; give one of --json and --format "
+                               f"{output_format}")
+    if principal and output_format != "mjcf":
+        raise click.UsageError("--principal goes with --format mjcf (quat + diaginertia)")
+    as_json = as_json or output_format == "json"
     from massprops.analysis import inspect_file
 
     def one(path: str) -> None:
@@ -126,12 +153,71 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], density: float | None,
             _say_warning(result.mesh.name, w)
         if as_json:
             _emit_json(result.as_dict())
+        elif output_format in ELEMENT_FORMATS:
+            from massprops.robot.elements import WRITERS
+
+            p = result.properties
+            click.echo(f"<!-- {result.mesh.name} -->")
+            click.echo(WRITERS[output_format](p.mass, p.center_of_mass, p.inertia,
+                                              principal=principal))
         else:
             from massprops.report import print_inspection
 
             print_inspection(result)
 
     ctx.exit(_worst(ctx, meshes, one))
+
+
+@cli.command()
+@click.argument("description", metavar="FILE")
+@click.option("--json", "as_json", is_flag=True, help="One JSON object per link, one per line.")
+@click.option("--check", "rtol", type=float, default=None, metavar="RTOL",
+              callback=_non_negative,
+              help="Exit 4 if any link's stated inertial differs from its geometry by more than "
+                   "RTOL (mass, COM / link size, inertia in the 2-norm; all relative).")
+@click.option("--write", "output_path", default=None, metavar="OUT",
+              help="Write the description with the computed inertials (never over FILE).")
+@click.option("--force", is_flag=True, help="Replace OUT if it exists (never FILE).")
+@click.option("--from", "source", type=click.Choice(("collision", "visual")),
+              default="collision", show_default=True, help="Which geometry makes the link.")
+@click.option("--density", type=float, callback=_positive,
+              help="Density in kg/m³ for every geometry (default: keep each stated mass).")
+@click.option("--package-path", "package_paths", multiple=True, metavar="DIR",
+              help="Folder holding packages for package:// and model:// (repeatable; "
+                   "ROS_PACKAGE_PATH is searched too).")
+@click.option("--allow-open", is_flag=True, help="Compute open meshes anyway (with warnings).")
+@click.pass_context
+def model(ctx: click.Context, description: str, as_json: bool, rtol: float | None,
+          output_path: str | None, force: bool, source: str, density: float | None,
+          package_paths: tuple[str, ...], allow_open: bool) -> None:
+    """Inertials of every link of a robot description (URDF, SDF or MJCF FILE) from its meshes
+    and primitives, against the inertials it states."""
+    link_errors = []
+
+    def run() -> None:
+        from massprops.robot.analyze import analyze_model
+
+        report = analyze_model(description, source=source, density=density,
+                               package_paths=package_paths, allow_open=allow_open)
+        for w in report.model.warnings:
+            _say_warning(description, w)
+        for line in report.errors:
+            _say_error(line)
+        link_errors.extend(report.errors)
+        if as_json:
+            for r in report.links:
+                _emit_json(r.as_dict(description))
+        else:
+            from massprops.report import print_model
+
+            print_model(report, rtol)
+        if output_path is not None:
+            report.write(output_path, force=force)
+        if rtol is not None:
+            report.require_agreement(rtol)
+
+    code = _guarded(ctx, run)
+    ctx.exit(max(code, 1 if link_errors else 0))
 
 
 @cli.command()

@@ -157,3 +157,32 @@ def print_precision(name: str, report) -> None:
     acc = ref.get("accuracy")
     _console.print(f"reference: {ref['kind']} ({ref['checked']}); its accuracy ~ "
                    f"{acc:.1e}" if acc is not None else f"reference: {ref['kind']}")
+
+
+def print_model(report, rtol: float | None = None) -> None:
+    """`massprops model`: one row per link, stated against computed (rtol marks the failures)."""
+    t = Table(title=Text(f"{report.name} ({report.model.format})", style="bold"),
+              title_justify="left", box=None, padding=(0, 2), header_style="bold")
+    for col in ("link", "mass [kg]", "mass off", "COM off [m]", "of size", "inertia off",
+                "axes [°]", "valid", "check"):
+        t.add_column(col, justify="left" if col == "link" else "right", no_wrap=True)
+    notes = []
+    for r in report.links:
+        if r.computed is None:
+            _row(t, r.name, "", "", "", "", "", "", "", "skipped")
+            notes.append(f"{r.name}: {r.reason}")
+            continue
+        c, cmp = r.computed, r.comparison
+        if cmp is None:
+            _row(t, r.name, f"{c.mass:.6g}", "", "", "", "", "", "", "not stated")
+        else:
+            angle = "" if cmp.axes_angle is None else f"{math.degrees(cmp.axes_angle):.3g}"
+            verdict = "" if rtol is None else ("ok" if cmp.passes(rtol) else "FAIL")
+            _row(t, r.name, f"{c.mass:.6g}", f"{cmp.mass_rel:.2%}", f"{cmp.com_offset:.3g}",
+                 f"{cmp.com_rel:.2%}", f"{cmp.inertia_rel:.2%}", angle,
+                 "yes" if not cmp.problems else "NO", verdict)
+            notes.extend(f"{r.name}: stated {p}" for p in cmp.problems)
+        notes.extend(f"{r.name}: {w}" for w in r.warnings)
+    _console.print(t)
+    for n in notes:
+        _console.print(Text(n, style="yellow"))

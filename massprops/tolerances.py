@@ -38,3 +38,11 @@ robot parts. Eight ulps welds those and nothing a modeller could have meant: a r
 part is many orders above 1e-15 of its coordinates, and trimesh's fixed 1e-8 m is a guess that
 merges real features of a small part and misses the cracks of a large one. The weld is bounded
 too: only groups no wider than the tolerance are welded, and only if that leaves no open edge."""
+
+INERTIA_VALIDITY_RTOL = 1e-12
+"""A stated inertia tensor counts as physically valid when it is symmetric, its smallest principal
+moment is positive, and each principal moment is at most the sum of the other two, each within
+this fraction of the largest moment. Writers print floats in repr, so a tensor massprops wrote
+comes back exact; 1e-12 leaves room for a tensor that was rounded to ~12 digits by another tool
+(a thin rod or disc sits exactly on the triangle inequality's edge) while a placeholder that
+breaks it does so by percent."""
