@@ -262,9 +262,10 @@ def _health(mesh: Mesh, a: _Analysis, volumes: np.ndarray, *, flipped: bool = Fa
 
 
 # --- orientation of the pieces ------------------------------------------------------------------
-def _plan_warnings(plan: Plan, volumes: np.ndarray, quiet: np.ndarray) -> list[str]:
+def _plan_warnings(plan: Plan, volumes: np.ndarray, quiet: np.ndarray, unioned: bool = False
+                   ) -> list[str]:
     """Warnings for the plan, at most 5 of a kind; components in ``quiet`` were re-wound and are
-    reported as such."""
+    reported as such; overlaps are not warned about when the caller unites the pieces."""
     k = volumes.size
     out = []
     if plan.whole and not np.all(quiet):
@@ -275,7 +276,7 @@ def _plan_warnings(plan: Plan, volumes: np.ndarray, quiet: np.ndarray) -> list[s
                             for c in np.flatnonzero(plan.flip & ~quiet)])
     out += _first_five([f"components {o + 1} and {i + 1} overlap or nest (a vertex of {i + 1} "
                         f"lies inside {o + 1}): the volume they share is counted twice"
-                        for o, i in plan.overlaps])
+                        for o, i in ([] if unioned else plan.overlaps)])
     out += _first_five([f"component {c + 1} (a cavity: faces inward) is partly outside every "
                         f"solid part: that part is subtracted from nothing" for c in plan.loose])
     return out
@@ -334,11 +335,14 @@ def check_mesh(mesh: Mesh) -> MeshHealth:
     return _health(mesh, a, volumes, warnings=warnings + _shape_notes(a))
 
 
-def prepare_mesh(mesh: Mesh, *, allow_open: bool = False) -> tuple[Mesh, MeshHealth]:
+def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
+                 ) -> tuple[Mesh, MeshHealth]:
     """The mesh to integrate, and its health (topology as read; volumes and repairs as returned).
 
     Closed and outward: returned unchanged (the same object). Inside out: flipped. An inverted
     part: flipped. Inconsistent winding on a 2-manifold: re-wound. Overlapping parts: warned.
+    ``unioned``: the caller replaces the pieces by their union (``massprops.repair.union``), so
+    overlaps are neither warned about nor measured.
     Raises MeshTopologyError if the mesh has no faces, is one-sided, or is open (boundary edges,
     or non-manifold edges used unequally each way) unless ``allow_open``; DegenerateMeshError if
     its faces use fewer than 4 distinct positions; MeshFormatError for out-of-range indices.
@@ -370,10 +374,15 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False) -> tuple[Mesh, MeshHea
     if not closed:
         if not allow_open:
             n_open = a.edges.count("open" if rewind.any() else "unbalanced")
+            from massprops.repair.holes import describe_holes  # the error path only
+
+            holes = describe_holes(mesh)
             raise MeshTopologyError(f"{mesh.name}: mesh is not closed: "
                                     f"{n_open} boundary edges (total length "
-                                    f"{_boundary_length(mesh, a):.6g} m); use --allow-open to "
-                                    f"compute anyway")
+                                    f"{_boundary_length(mesh, a):.6g} m"
+                                    f"{'' if holes is None else ' in ' + holes}); use "
+                                    f"--fill-holes to cap them, or --allow-open to compute "
+                                    f"anyway")
         # Volumes of an open surface depend on the origin: take them about the box centre.
         centre = _box_centre(mesh, a)
         det6 = np.where(rewind, -1.0, 1.0) * signed_volumes6(
@@ -389,9 +398,14 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False) -> tuple[Mesh, MeshHea
         plan = orientation_plan(volumes, sample_windings(mesh.vertices, mesh.faces, a.tri, piece,
                                                          a.n_comp))
     touched = np.bincount(a.face_comp[rewind], minlength=a.n_comp) > 0
-    warnings += _plan_warnings(plan, volumes, touched)
+    warnings += _plan_warnings(plan, volumes, touched, unioned)
     flip = rewind ^ np.append(plan.flip, False)[a.face_comp]  # face_comp -1: no component
     fixed = _reverse(mesh, flip) if flip.any() else mesh
+    if plan.overlaps and not unioned:  # measured on the oriented pieces; lazily: rare, costly
+        from massprops.repair.union import overlap_warning
+
+        warnings.append(overlap_warning(fixed, volumes * np.where(plan.flip, -1.0, 1.0),
+                                        plan.overlaps))
     poly = _polygon_of_triangle(mesh)
     changed = np.bincount(poly, weights=flip, minlength=mesh.n_faces) > 0
     in_touched = np.bincount(poly, weights=np.append(touched, False)[a.face_comp],

@@ -27,3 +27,21 @@ MIN_VOLUME_TO_ERROR = 100.0
 nothing we can resolve (flat, or inside-out halves cancelling) and is refused as degenerate,
 rather than reported as 0, a random sign or NaN. A bound-based test, unlike a fraction of the
 bounding box, accepts a needle of aspect 1e-6 lying along the box diagonal."""
+
+MAX_HOLE_AREA_FRACTION = 0.1
+"""``--fill-holes`` caps a boundary loop only if its cap is at most this fraction of the surface
+area (``--max-hole`` overrides). Holes from scanning and export are small (well under 1 % of the
+surface); a loop whose cap would be a tenth of the part is an opening (a cup, a bowl, a pipe's
+end) or a missing face that the user should decide about: capping it would be a guess about a
+large part of the boundary. A cube missing one face (a fifth of what remains) needs the override."""
+
+HOLE_CREASE_ANGLE_DEG = 45.0
+"""A face on a hole's rim tilted less than this from the cap's plane continues the surface across
+the hole (a hole in a curved patch): the reasonable caps then include a dome continuing its slope,
+and the error bar covers it. A steeper face meets the hole at a crease (the cube missing a face:
+90°), where the surface turns rather than continues, and adds no dome."""
+
+SHELL_WARN_FRACTION = 0.01
+"""``--shell`` warns when the thin-wall model's error bound exceeds this fraction of the mass or
+of a principal moment: the wall is thick against the surface's curvature or its facets (or the
+thickness was given in the file's unit instead of metres)."""
