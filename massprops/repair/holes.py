@@ -14,8 +14,9 @@ that spans the rim inside the rim's convex hull (all its triangulations, flat or
 dome that continues the slope of the faces around the rim where they meet it at less than
 ``HOLE_CREASE_ANGLE_DEG`` (a hole in a curved surface; steeper faces are a crease, where the
 surface turns, not continues). Two such caps differ by a volume inside the hull (its slab times
-its projected area) or inside the dome (the projected hull area times the height the rim's
-steepest continuing face rises over the hole's radius). That volume, per hole, is the hole's share
+its projected area) or under the dome, itself under the cone over the hull whose height is what
+the rim's steepest continuing face rises over the hole's radius (hull area × height / 3; a
+spherical cap continuing a slope fills 3/4 of that cone). That volume, per hole, is its share
 of the error bar (`massprops.repair.bars`): zero for a planar rim with square neighbours (the
 cube missing a face is capped exactly).
 
@@ -267,7 +268,9 @@ def _spread(points: np.ndarray, w: Welded, faces: np.ndarray, loop: _Loop
     continuing = tilt < math.radians(HOLE_CREASE_ANGLE_DEG)
     slope = float(np.tan(tilt[continuing]).max(initial=0.0))
     rise = slope * radius
-    volume = hull * (slab + rise) * (1 + 1e-9)  # margin for this bound's own rounding
+    # between two caps in the hull: at most the hull's slab; a dome continuing the slope stays
+    # under the cone of height ``rise`` over the (convex) hull, of volume hull · rise / 3
+    volume = hull * (slab + rise / 3) * (1 + 1e-9)  # margin for this bound's own rounding
     pad = slab + rise
     tilt = min(1.0, 2 * pad / radius) if radius > 0 else 1.0
     return Regions(np.array([volume]), (points.min(axis=0) - pad)[None],

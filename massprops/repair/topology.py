@@ -135,14 +135,19 @@ def split_pieces(w: Welded) -> Pieces:
     out = np.full(m, -1, np.int64)
     out[w.valid] = rank[np.searchsorted(roots, label[w.valid])]
     k = roots.size
-    use_piece = out[e.face]  # a non-manifold edge may touch several pieces: once for each
-    kind = np.repeat(np.select([e.count == 1, e.count > 2, ~ok], [1, 2, 3], 0), e.count)
-    counts = {}
-    for code in (1, 2, 3):
-        sel = kind == code
-        pairs = np.unique(np.stack([np.repeat(np.arange(e.count.size), e.count)[sel],
-                                    use_piece[sel]]), axis=1)
-        counts[code] = np.bincount(pairs[1], minlength=k) if pairs.size else np.zeros(k, np.int64)
+    # a piece is closed when each edge it uses is used by ITS triangles once each way (solids
+    # touching along an edge share it, four uses in all, two per piece)
+    edge_of_use = np.repeat(np.arange(e.count.size), e.count)
+    group = edge_of_use * k + out[e.face]
+    order = np.argsort(group, kind="stable")
+    g = group[order]
+    new = np.concatenate(([True], g[1:] != g[:-1]))
+    starts = np.flatnonzero(new)
+    uses = np.diff(np.append(starts, g.size))
+    forward = np.add.reduceat(e.forward[order].astype(np.int64), starts)
+    piece = g[starts] % k
+    kind = np.select([uses == 1, uses > 2, forward != 1], [1, 2, 3], 0)
+    counts = {code: np.bincount(piece[kind == code], minlength=k) for code in (1, 2, 3)}
     rows = np.flatnonzero(w.valid)
     origin = w.mesh.vertices[w.mesh.faces[rows[0]], :][0] if rows.size else np.zeros(3)
     det6, _ = signed_volumes6(w.mesh.vertices, w.mesh.faces[rows], origin)

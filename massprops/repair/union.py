@@ -100,7 +100,10 @@ def union_mesh(mesh: Mesh) -> UnionResult:
 
 
 def finished(record: UnionRecord, volume_after: float) -> UnionRecord:
-    return replace(record, volume_after=float(volume_after))
+    """The record with the integral of the result; a single piece was not touched, so its
+    volume before is that same integral (not the rougher per-piece sum)."""
+    before = record.volume_before if record.pieces > 1 else float(volume_after)
+    return replace(record, volume_before=before, volume_after=float(volume_after))
 
 
 def overlap_warning(mesh: Mesh, volumes: np.ndarray, overlaps: list[tuple[int, int]]) -> str:
