@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from massprops.facesums import gamma
 from massprops.mass import ErrorBars, MassProperties, Uncertainty
 
 
@@ -39,32 +40,68 @@ class Regions:
         return float(self.volume.sum())
 
 
-def moment_bounds(regions: Regions, props: MassProperties, *, mass_given: bool) -> Uncertainty:
+@dataclass(frozen=True)
+class RegionSums:
+    """Σ_k W_k, Σ_k W_k r_k (3,) and Σ_k W_k g(r_k) (3, 3), g_ii = r_j² + r_k², g_ij = r_i r_j,
+    with r_k >= |x - c| per axis over region k's box: all the bars need from regions about a
+    centre c (they add: regions can be summed block by block, never all held at once)."""
+
+    volume: float = 0.0
+    first: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    second: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((3, 3)))
+
+    def __add__(self, other: RegionSums) -> RegionSums:
+        return RegionSums(self.volume + other.volume, self.first + other.first,
+                          self.second + other.second)
+
+
+def region_sums(volume: np.ndarray, lo: np.ndarray, hi: np.ndarray, centre: np.ndarray
+                ) -> RegionSums:
+    """The `RegionSums` of regions (k,) in boxes lo, hi (k, 3) about ``centre`` (3,)."""
+    if volume.size == 0:
+        return RegionSums()
+    return reach_sums(volume, np.maximum(np.abs(hi - centre), np.abs(centre - lo)).T)
+
+
+def reach_sums(volume: np.ndarray, reach: np.ndarray) -> RegionSums:
+    """The `RegionSums` of regions (k,) whose points lie within ``reach`` (3, k) of the centre
+    on each axis."""
+    rows = np.empty((9, volume.size))  # r_i, r_j² + r_k², r_i r_j: one matrix-vector product
+    rows[:3] = reach
+    sq = reach * reach
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        np.add(sq[j], sq[k], out=rows[3 + i])
+        np.multiply(reach[i], reach[j], out=rows[6 + i])
+    t = np.dot(rows, volume) * (1 + gamma(volume.size + 4))  # k non-negative terms, any order
+    g = np.diag(t[3:6])
+    for i in range(3):
+        j = (i + 1) % 3
+        g[i, j] = g[j, i] = t[6 + i]
+    return RegionSums(float(volume.sum()) * (1 + gamma(volume.size)), t[:3], g)
+
+
+def moment_bounds(regions: Regions | RegionSums, props: MassProperties, *,
+                  mass_given: bool) -> Uncertainty:
     """The bars ``regions`` put on ``props`` (integrated after the repair), first order.
 
     With s = x - c about the centre of mass and r_i >= |s_i| over a box: |Δ volume| <= W,
     |Δ c_i| <= Σ W r_i / V, |Δ J_ii| <= ρ Σ W (r_j² + r_k²), |Δ J_ij| <= ρ Σ W r_i r_j (the COM's
     own move is second order in J because ∫ s dV = 0). A given mass fixes m, and the density
-    ρ = m / V moves instead: |ΔJ| gains |J| W / V.
+    ρ = m / V moves instead: |ΔJ| gains |J| W / V. The sums carry their rounding margin
+    (`region_sums`); 1e-12 more covers adding up to 10³ blocks and the products here.
     """
-    w = regions.volume
-    c = props.center_of_mass
-    reach = np.maximum(np.abs(regions.hi - c), np.abs(c - regions.lo))  # (k, 3)
-    total = float(w.sum()) * (1 + 1e-12)  # the bound of a rounded sum of non-negative terms
+    if isinstance(regions, Regions):
+        regions = region_sums(regions.volume, regions.lo, regions.hi, props.center_of_mass)
+    margin = 1 + 1e-12
+    total = regions.volume * margin
     volume, rho = props.volume, props.density
-    wr = w @ reach if w.size else np.zeros(3)
-    sq = reach**2
-    g = np.empty((3, 3))
-    for i in range(3):
-        j, k = (i + 1) % 3, (i + 2) % 3
-        g[i, i] = w @ (sq[:, j] + sq[:, k]) if w.size else 0.0
-        g[i, j] = g[j, i] = w @ (reach[:, i] * reach[:, j]) if w.size else 0.0
-    inertia = rho * g * (1 + 1e-12)
+    inertia = rho * regions.second * margin
     if mass_given:
         inertia = inertia + np.abs(props.inertia) * total / volume
     moments = np.full(3, np.linalg.norm(inertia, 2))
-    return Uncertainty(total, 0.0 if mass_given else rho * total, _ro(wr * (1 + 1e-12) / volume),
-                       _ro(inertia), _ro(moments))
+    return Uncertainty(total, 0.0 if mass_given else rho * total,
+                       _ro(regions.first * margin / volume), _ro(inertia), _ro(moments))
 
 
 def plus(a: Uncertainty | None, b: Uncertainty | None) -> Uncertainty | None:

@@ -6,8 +6,9 @@ along its normal n_f (a right prism), and neighbouring prisms are joined by a mi
 - each prism exactly: mass ρ T A_f, first moment ρ T ∫x dA, second moment
   ρ T ∫x xᵀ dA + ρ T³/12 A_f n_f n_fᵀ (the through-thickness term, which makes a flat plate exact);
   ∫ over a triangle: A (a+b+c)/3 and A/12 (a aᵀ + b bᵀ + c cᵀ + s sᵀ), s = a + b + c;
-- each edge e where two faces turn by θ: the prisms leave a gap (a kite of area
-  (T/2)² tan(θ/2) in the section across the edge) on the convex side and overlap by the mirror
+- each edge e where two faces turn by θ (evaluated in `massprops.repair.joins`): the prisms
+  leave a gap (a kite of area (T/2)² tan(θ/2) in the section across the edge) on the convex
+  side and overlap by the mirror
   image of that kite on the concave side. A mitred wall fills the gap once and holds the overlap
   once: the change ∫_gap g − ∫_overlap g = 2 L Dg(midpoint)[∫_kite y dy] is exact for the
   polynomials g of the moments (the kites are point reflections of each other through the edge)
@@ -39,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.errors import DegenerateMeshError, UsageError
-from massprops.facesums import U, gamma, pairwise_depth
+from massprops.facesums import BLOCK, U, gamma
 from massprops.inertia import parallel_axis_to_com
 from massprops.mass import (
     ErrorBars,
@@ -50,7 +51,8 @@ from massprops.mass import (
     properties_from_moments,
 )
 from massprops.mesh import Mesh
-from massprops.repair.bars import Regions, moment_bounds, with_repair_bar
+from massprops.repair.bars import moment_bounds, with_repair_bar
+from massprops.repair.joins import Joins, joins, unit_normals
 from massprops.repair.topology import Welded
 from massprops.tolerances import SHELL_WARN_FRACTION
 
@@ -111,17 +113,17 @@ def shell_properties(mesh: Mesh, thickness: float, *, density: float | None = No
     if faces.area <= 0:
         raise DegenerateMeshError(f"{mesh.name}: the surface has no area (every triangle is a "
                                   f"line or a point); --shell needs a surface")
-    joins = _joins(w, origin, thickness)
-    corners = _corners(w, thickness, joins.turning)
-    mo = _unit_moments(faces, joins, thickness)
+    normals, doubled = unit_normals(w.positions[w.tri])  # every face's, once
+    met = joins(w, normals, doubled, origin, thickness)
+    mo = _unit_moments(faces, met, thickness)
     props = properties_from_moments(origin, mo, density=density, mass=mass)
     if mesh.coordinate_dtype == np.float32:
         props = _with_input_bar(props, mesh, faces, thickness, mass is not None)
-    regions = Regions.join(joins.regions, corners)
-    bar = moment_bounds(regions, props, mass_given=mass is not None)
+    bar = moment_bounds(met.regions.sums(w.positions, props.center_of_mass), props,
+                        mass_given=mass is not None)
     props = with_repair_bar(props, bar)
-    record = ShellRecord(float(thickness), MODEL, faces.area, float(props.volume), joins.mitred,
-                         joins.folded, joins.crowded, regions.total)
+    record = ShellRecord(float(thickness), MODEL, faces.area, float(props.volume), met.mitred,
+                         met.folded, met.crowded, met.regions.total)
     return ShellResult(props, record, tuple(_warnings(props, bar, thickness)))
 
 
@@ -158,190 +160,66 @@ _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
 
 
 def _face_terms(mesh: Mesh, rows: np.ndarray, origin: np.ndarray, thickness: float) -> _FaceTerms:
-    p = mesh.vertices[mesh.faces[rows]].transpose(1, 2, 0)  # (corner, axis, face): rows contiguous
-    x = p - origin[None, :, None]
+    """One pass over the faces in blocks of ``facesums.BLOCK`` (cache-sized; each block total a
+    pairwise sum, the blocks added by math.fsum, as ``massprops.facesums`` does)."""
+    t2 = thickness * thickness / 12
+    totals, lo, hi = [], np.full(3, np.inf), np.full(3, -np.inf)
+    for start in range(0, rows.size, BLOCK):
+        p = np.ascontiguousarray(mesh.vertices[mesh.faces[rows[start:start + BLOCK]]]
+                                 .transpose(1, 2, 0))  # (corner, axis, face)
+        x = p - origin[None, :, None]
+        lo = np.minimum(lo, x.min(axis=(0, 2)))
+        hi = np.maximum(hi, x.max(axis=(0, 2)))
+        totals.append(_block_terms(p, x, t2))
+    t = np.array([math.fsum(col) for col in np.array(totals).T])
+    # per face: <= 24 roundings on top of the stored coordinates (differences, products, the
+    # square root, the divisions); a block's dot products add at most one rounding per face
+    # (whatever order BLAS sums in), fsum one more
+    err = gamma(24 + min(rows.size, BLOCK) + 1) * t[10:20]
+    second, second_err = np.empty((3, 3)), np.empty((3, 3))
+    for idx, (a, c) in enumerate(_PAIRS):
+        second[a, c] = second[c, a] = t[4 + idx]
+        second_err[a, c] = second_err[c, a] = err[4 + idx]
+    return _FaceTerms(float(t[0]), float(err[0]), t[1:4], err[1:4], second, second_err,
+                      float(t[20]), lo, hi)
+
+
+def _block_terms(p: np.ndarray, x: np.ndarray, t2: float) -> np.ndarray:
+    """(21,) block totals: area, ∫x_i dA (3), ∫x_a x_b dA + T²/12 A n_a n_b (6, ``_PAIRS``); the
+    same ten with absolute values (the rounding bounds' weights); the perimeters."""
     e1, e2 = p[1] - p[0], p[2] - p[0]
     j, k = [1, 2, 0], [2, 0, 1]
     plus, minus = e1[j] * e2[k], e1[k] * e2[j]
-    n = plus - minus                                             # (3, m) twice the area vector
-    n2 = np.sqrt((n * n).sum(axis=0))                            # twice the area
-    big = np.sqrt(((np.abs(plus) + np.abs(minus)) ** 2).sum(axis=0))  # >= n2, its error scale
+    n = plus - minus                                             # (3, f) twice the area vector
+    n2 = np.sqrt(np.einsum("if,if->f", n, n))                    # twice the area
+    np.abs(plus, out=plus)
+    np.abs(minus, out=minus)
+    plus += minus
+    big = np.sqrt(np.einsum("if,if->f", plus, plus))             # >= n2, its error scale
     s = x.sum(axis=0)
-    sa = np.abs(x).sum(axis=0)
-    half = n2 / 2
-    terms = [half]
-    bounds = [big / 2]
-    for i in range(3):
-        terms.append(half * s[i] / 3)
-        bounds.append(big / 2 * sa[i] / 3)
-    t2 = thickness * thickness / 12
+    ax = np.abs(x)
+    sa = ax.sum(axis=0)
+    half, half_big = n2 / 2, big / 2
+    out = np.empty(21)
+    out[0], out[10] = half.sum(), half_big.sum()
+    out[1:4] = s @ half / 3
+    out[11:14] = sa @ half_big / 3
     with np.errstate(invalid="ignore", divide="ignore"):
         inv = np.where(n2 > 0, 1 / np.where(n2 > 0, n2, 1), 0.0)
-    for a, b in _PAIRS:
-        q = x[:, a] * x[:, b]
-        qa = np.abs(x[:, a]) * np.abs(x[:, b])
-        terms.append(half / 12 * (q.sum(axis=0) + s[a] * s[b]) + t2 * n[a] * n[b] * inv / 2)
-        bounds.append(big / 24 * (qa.sum(axis=0) + sa[a] * sa[b]) + t2 * big / 2)
-    t = np.array(terms)
-    b = np.array(bounds)
-    totals = t.sum(axis=1)
-    # per face: <= 24 roundings on top of the stored coordinates (differences, products, the
-    # square root, the divisions); the pairwise sum adds its depth
-    err = gamma(24 + pairwise_depth(rows.size) + 1) * b.sum(axis=1)
-    second, second_err = np.empty((3, 3)), np.empty((3, 3))
-    for idx, (a, c) in enumerate(_PAIRS):
-        second[a, c] = second[c, a] = totals[4 + idx]
-        second_err[a, c] = second_err[c, a] = err[4 + idx]
-    edges = np.sqrt((e1 * e1).sum(axis=0)) + np.sqrt((e2 * e2).sum(axis=0))
+    thick = t2 * inv / 2
+    for idx, (a, b) in enumerate(_PAIRS):
+        q = np.einsum("cf,cf->f", x[:, a], x[:, b]) + s[a] * s[b]
+        qa = np.einsum("cf,cf->f", ax[:, a], ax[:, b]) + sa[a] * sa[b]
+        out[4 + idx] = (half / 12) @ q + (n[a] * n[b]) @ thick
+        out[14 + idx] = (half_big / 12) @ qa + t2 * half_big.sum()
     third = p[2] - p[1]
-    perimeter = float((edges + np.sqrt((third * third).sum(axis=0))).sum())
-    return _FaceTerms(float(totals[0]), float(err[0]), totals[1:4], err[1:4], second, second_err,
-                      perimeter, x.min(axis=(0, 2)), x.max(axis=(0, 2)))
-
-
-# --- the joins at edges ---------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class _Joins:
-    """Mitre corrections per unit density (first (3,) m⁴, second (3, 3) m⁵ about the origin,
-    with a bound of their rounding), the error regions, and counts."""
-
-    first: np.ndarray
-    second: np.ndarray
-    err_first: np.ndarray
-    err_second: np.ndarray
-    regions: Regions
-    mitred: int
-    folded: int
-    crowded: int
-    turning: np.ndarray  # (e,) bool: the edge's faces are not all in one plane
-
-
-def _unit_normals(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(unit normals (f, 3), twice the areas (f,)) of triangles p (f, 3 corners, 3)."""
-    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    n2 = np.linalg.norm(n, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(n2[:, None] > 0, n / n2[:, None], 0.0), n2
-
-
-def _joins(w: Welded, origin: np.ndarray, thickness: float) -> _Joins:
-    e = w.edges
-    pos = w.positions
-    half_t = thickness / 2
-    pu, pv = pos[e.u], pos[e.v]
-    length = np.linalg.norm(pv - pu, axis=1)
-    two = np.flatnonzero(e.count == 2)
-    f, g = e.face[e.start[two]], e.face[e.start[two] + 1]
-    pf, pg = pos[w.tri[f]], pos[w.tri[g]]
-    nf, af = _unit_normals(pf)
-    ng, ag = _unit_normals(pg)
-    same_way = e.forward[e.start[two]] == e.forward[e.start[two] + 1]
-    ng = np.where(same_way[:, None], -ng, ng)  # wound against its neighbour: compare as one
-    cross = np.linalg.norm(np.cross(nf, ng), axis=1)
-    theta = np.arctan2(cross, np.einsum("ij,ij->i", nf, ng))
-    lt = length[two]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        hf, hg = af / lt, ag / lt  # heights over the edge: twice the area / the edge's length
-    tan_half = np.tan(theta / 2)
-    reach = half_t * tan_half            # how far the kite runs along each face from the edge
-    fits = (reach <= np.minimum(hf, hg)) & (theta > 0)
-    # the opposite corner of g: above f's plane means g turns toward n_f (concave on that side)
-    opposite = pos[w.tri[g, (e.corner[e.start[two] + 1] + 2) % 3]]
-    rise = np.einsum("ij,ij->i", opposite - pu[two], nf)
-    side = -np.sign(rise)                # the gap is on the side g turns away from
-    bis = nf + ng
-    bis_norm = np.linalg.norm(bis, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        bis = np.where(bis_norm[:, None] > 0, bis / bis_norm[:, None], 0.0)
-    cos_half = np.cos(theta / 2)
-    kite = half_t * half_t * tan_half
-    with np.errstate(invalid="ignore", divide="ignore"):
-        depth = thickness / 6 * (cos_half + 1 / cos_half)
-    y = np.where(fits[:, None], (side * kite * depth)[:, None] * bis, 0.0)  # ∫_kite y dy
-    mid = (pu[two] + pv[two]) / 2 - origin
-    first_e = 2 * lt[:, None] * y
-    second_e = 2 * lt[:, None, None] * (mid[:, :, None] * y[:, None, :]
-                                        + y[:, :, None] * mid[:, None, :])
-    first = first_e.sum(axis=0)
-    second = second_e.sum(axis=0)
-    slack = gamma(40 + pairwise_depth(max(two.size, 1)))
-    err_first = slack * np.abs(first_e).sum(axis=0)
-    err_second = slack * np.abs(second_e).sum(axis=0)
-
-    # regions: bends instead of mitres, folds that could not be mirrored, crowded edges
-    with np.errstate(invalid="ignore", divide="ignore"):
-        r_edge = np.where(fits, half_t / cos_half, np.hypot(half_t, np.maximum(hf, hg)))
-    bend = np.where(fits, half_t * half_t * np.maximum(tan_half - theta / 2, 0.0),
-                    2 * half_t * np.minimum(np.nan_to_num(reach, nan=np.inf, posinf=np.inf),
-                                            np.maximum(hf, hg)))
-    bend = np.where(theta > 0, bend, 0.0) * lt
-    crowd = np.flatnonzero(e.count > 2)
-    h_crowd = _longest_height(w, e, crowd)
-    vol_crowd = e.count[crowd] * thickness * np.minimum(h_crowd, thickness) * length[crowd]
-    ends_lo = np.minimum(pu, pv)
-    ends_hi = np.maximum(pu, pv)
-    lo = np.concatenate([ends_lo[two] - r_edge[:, None], ends_lo[crowd] - 1.5 * thickness])
-    hi = np.concatenate([ends_hi[two] + r_edge[:, None], ends_hi[crowd] + 1.5 * thickness])
-    volume = np.concatenate([bend, vol_crowd]) * (1 + 1e-9)
-    keep = volume > 0
-    regions = Regions(volume[keep], lo[keep], hi[keep])
-    turning = e.count > 2
-    turning[two] = theta > 0
-    return _Joins(first, second, err_first, err_second, regions,
-                  int(np.count_nonzero(fits)),
-                  int(np.count_nonzero(~fits & (theta > 0))), int(crowd.size), turning)
-
-
-def _longest_height(w: Welded, e, crowd: np.ndarray) -> np.ndarray:
-    """(c,) the largest height over the edge of the triangles at each crowded edge, m."""
-    out = np.zeros(crowd.size)
-    for i, k in enumerate(crowd):
-        faces = e.face[e.start[k]:e.start[k] + e.count[k]]
-        _, n2 = _unit_normals(w.positions[w.tri[faces]])
-        edge = np.linalg.norm(w.positions[e.v[k]] - w.positions[e.u[k]])
-        out[i] = n2.max() / edge if edge > 0 else 0.0
+    out[20] = (np.sqrt(np.einsum("if,if->f", e1, e1)) + np.sqrt(np.einsum("if,if->f", e2, e2))
+               + np.sqrt(np.einsum("if,if->f", third, third))).sum()
     return out
 
 
-# --- the corners --------------------------------------------------------------------------------
-def _corners(w: Welded, thickness: float, turning: np.ndarray) -> Regions:
-    """One region per vertex whose faces are not all parallel (module docstring). The wall's
-    layers there are at most as many as the planes meeting at the vertex, and those are at most
-    one more than its turning edges: that count is the multiplicity (``deg`` in the docstring)."""
-    rows = np.flatnonzero(w.valid)
-    tri = w.tri[rows]
-    p = w.positions[tri]
-    n, n2 = _unit_normals(p)
-    ids = tri.ravel()
-    k = w.reps.size
-    mean = np.zeros((k, 3))
-    np.add.at(mean, ids, np.repeat(n * n2[:, None], 3, axis=0))
-    size = np.linalg.norm(mean, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean = np.where(size[:, None] > 0, mean / size[:, None], 0.0)
-    cos_b = np.ones(k)
-    np.minimum.at(cos_b, ids, np.abs(np.einsum("ij,ij->i", np.repeat(n, 3, axis=0), mean[ids])))
-    cos_b = np.clip(cos_b, 0.0, 1.0)
-    e = w.edges
-    deg = 1 + np.bincount(e.u[turning], minlength=k) + np.bincount(e.v[turning], minlength=k)
-    deg[np.bincount(ids, minlength=k) == 0] = 0
-    longest = np.zeros(k)
-    length = np.linalg.norm(w.positions[e.v] - w.positions[e.u], axis=1)
-    np.maximum.at(longest, e.u, length)
-    np.maximum.at(longest, e.v, length)
-    half_t = thickness / 2
-    with np.errstate(divide="ignore"):
-        radius = np.minimum(half_t / cos_b, half_t + longest)
-    volume = deg * (4 * np.pi / 3) * radius**3 * np.minimum(1.0, 1.0 - cos_b)
-    # 1 - cos β from a rounded cosine: a flat vertex computes ~1e-16, not 0; harmless (tiny)
-    keep = np.flatnonzero((volume > 0) & (deg > 0))
-    centre = w.positions[keep]
-    r = radius[keep, None]
-    return Regions(volume[keep] * (1 + 1e-9), centre - r, centre + r)
-
-
 # --- totals to moments ----------------------------------------------------------------------------
-def _unit_moments(faces: _FaceTerms, joins: _Joins, thickness: float) -> UnitMoments:
+def _unit_moments(faces: _FaceTerms, joins: Joins, thickness: float) -> UnitMoments:
     """Volume, COM (from the origin) and inertia about the COM per unit density, with their
     rounding bounds (first-order propagation, as in ``massprops.mass``)."""
     t = thickness
