@@ -215,27 +215,36 @@ def _displacement(verts: np.ndarray, tris: np.ndarray, source: np.ndarray, mesh:
                   ) -> tuple[np.ndarray, np.ndarray]:
     """(δ (t,), area (t,)): a bound of the distance of each result triangle's vertices from the
     plane of its source face (0 where every vertex is a vertex of that face, bit for bit), and
-    an upper bound of each result triangle's area, m and m²."""
-    p = mesh.vertices[mesh.faces[source]]                     # (t, 3 corners, 3)
-    q = verts[tris]                                           # (t, 3 corners, 3)
+    an upper bound of each result triangle's area, m and m²; in cache-sized blocks."""
+    delta, area = np.empty(tris.shape[0]), np.empty(tris.shape[0])
+    for lo in range(0, tris.shape[0], _BLOCK):
+        hi = min(lo + _BLOCK, tris.shape[0])
+        delta[lo:hi], area[lo:hi] = _block_displacement(verts[tris[lo:hi]],
+                                                        mesh.vertices[mesh.faces[source[lo:hi]]])
+    return delta, area
+
+
+_BLOCK = 1 << 14
+
+
+def _block_displacement(q: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """q (t, 3 corners, 3) result triangles, p (t, 3, 3) their source faces."""
     e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
     n = np.cross(e1, e2)
-    nn = np.linalg.norm(n, axis=1)
-    scale = np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
+    nn = np.sqrt(np.einsum("ij,ij->i", n, n))
+    scale = np.sqrt(np.einsum("ij,ij->i", e1, e1) * np.einsum("ij,ij->i", e2, e2))
     rel = q - p[:, None, 0]
     dist = np.abs(np.einsum("tk,tck->tc", n, rel))
-    reach = np.linalg.norm(rel, axis=2)
+    reach = np.sqrt(np.einsum("tck,tck->tc", rel, rel))
     with np.errstate(divide="ignore", invalid="ignore"):
         # n·w computed: each n_i is off by <= 4u |e1||e2| (edges, products, difference), the dot
         # adds 3u |n||w|, w itself u|w|: 16u |w||e1||e2| covers them, divided by |n| after.
         bound = (dist + 16 * U * reach * scale[:, None]) / nn[:, None] * (1 + 4 * U)
     bound = np.where(nn[:, None] > 0, bound, reach)  # a zero-area source: its corner's distance
-    same = (q[:, :, None, :] == p[:, None, :, :]).all(axis=3).any(axis=2)
+    same = ((q[:, :, None, :] == p[:, None, :, :]).all(axis=3)).any(axis=2)
     delta = np.where(same, 0.0, bound).max(axis=1)
-    a = q[:, 1] - q[:, 0]
-    b = q[:, 2] - q[:, 0]
-    area = np.linalg.norm(np.cross(a, b), axis=1) / 2 * (1 + 8 * U)
-    return delta, area
+    c = np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0])
+    return delta, np.sqrt(np.einsum("ij,ij->i", c, c)) / 2 * (1 + 8 * U)
 
 
 def _joined(mesh: Mesh, verts: np.ndarray, tris: np.ndarray, kept: np.ndarray) -> Mesh:
