@@ -45,3 +45,9 @@ SHELL_WARN_FRACTION = 0.01
 """``--shell`` warns when the thin-wall model's error bound exceeds this fraction of the mass or
 of a principal moment: the wall is thick against the surface's curvature or its facets (or the
 thickness was given in the file's unit instead of metres)."""
+
+RIM_NORMAL_RTOL = 1e-9
+"""A hole's rim whose vector area (Newell) is below this fraction of its points' spread
+Σ|p - c|² has no reliable normal (a figure of eight, a rim folded onto itself); its best-fit
+plane is then the direction of least spread. Round-off in the vector area is ~1e-16 of that
+spread, seven orders below; a real rim that flat is a sliver with no sensible cap plane anyway."""

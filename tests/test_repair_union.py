@@ -221,3 +221,23 @@ def test_default_warning_measures_the_shared_volume_and_names_union():
                     f"reported), measured from their union: that volume is counted more than "
                     f"once; --union counts it once"]
     assert result.repairs is None and result.properties.volume == pytest.approx(18.0)
+
+
+def test_modes_combine_in_order_fill_then_unite_then_wall():
+    """Two overlapping cubes, the second missing a face: capped, united (inclusion-exclusion);
+    then as a wall: the united surface has area 2 × (24 - 3) = 42 (each cube loses three unit
+    squares inside the other), so the mass is exactly ρ T 42 (mitres add no mass)."""
+    second = box((1, 1, 1), (3, 3, 3))
+    second = Mesh(second.vertices, second.faces[2:], name="open")
+    mesh = join(box((0, 0, 0), (2, 2, 2)), second)
+    both = RepairOptions(fill_holes=True, max_hole=0.25, union=True)
+    result = inspect_mesh(mesh, repairs=both)
+    assert_matches(result.properties, union_of_boxes([((0, 0, 0), (2, 2, 2)),
+                                                      ((1, 1, 1), (3, 3, 3))]))
+    assert list(result.repairs) == ["fill_holes", "union"]
+    wall = inspect_mesh(mesh, density=7.0, repairs=RepairOptions(fill_holes=True, max_hole=0.25,
+                                                                 union=True, shell=0.01))
+    assert list(wall.repairs) == ["fill_holes", "union", "shell"]
+    assert wall.properties.mass == pytest.approx(7.0 * 0.01 * 42, rel=1e-14)
+    assert wall.repairs["union"].volume_after == pytest.approx(15.0, rel=1e-14)
+    np.testing.assert_allclose(wall.properties.center_of_mass, [1.5, 1.5, 1.5], atol=1e-14)

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from massprops.tolerances import RIM_NORMAL_RTOL
+
 MAX_DP_POINTS = 200
 """Largest rim the minimum-area dynamic programme takes: O(k³) work (~0.2 s at 200 points) and
 O(k²) memory. A rim whose outline crosses itself in every plane and is larger than this is
@@ -26,7 +28,7 @@ def plane_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     area = np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)
     norm = np.linalg.norm(area)
     scale = float((np.linalg.norm(p, axis=1) ** 2).sum())
-    if norm > 1e-9 * scale:
+    if norm > RIM_NORMAL_RTOL * scale:
         normal = area / norm
     else:
         normal = np.linalg.eigh(p.T @ p)[1][:, 0]

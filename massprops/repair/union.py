@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from massprops.errors import ComputationError
 from massprops.mesh import Mesh
 from massprops.repair.bars import Regions
 from massprops.repair.topology import Pieces, Welded, split_pieces
@@ -80,6 +81,7 @@ def union_mesh(mesh: Mesh) -> UnionResult:
                              int(mesh.faces.shape[0]))
         return UnionResult(mesh, record, Regions.none(), ())
     composed = _compose(w, pieces)
+    _check_volume(composed, pieces, mesh.name)
     out = composed.result.to_mesh64()
     verts = np.ascontiguousarray(out.vert_properties[:, :3], dtype=np.float64)
     tris = np.asarray(out.tri_verts, dtype=np.int64).reshape(-1, 3)
@@ -192,6 +194,19 @@ def _compose(w: Welded, pieces: Pieces) -> _Composed:
                  for c in cavities if c not in used]
     return _Composed(result, solids, cavities, skipped,
                      [float(pieces.volumes[k]) for k in skipped], tuple(lines), tuple(warnings))
+
+
+def _check_volume(composed: _Composed, pieces: Pieces, name: str) -> None:
+    """A union holds no more than its solids together: the boolean's volume (its own float sum)
+    beyond that by more than rounding means its result cannot be trusted (input pieces that
+    cut through themselves, which no boolean defines)."""
+    solids = float(sum(pieces.volumes[k] for k in composed.solids))
+    united = composed.result.volume()
+    if united > solids * (1 + 1e-9) or united < 0:
+        raise ComputationError(f"{name}: the union of the pieces came out at {united:.6g} m³, "
+                               f"not within 0..{solids:.6g} m³ (the solids together): some "
+                               f"piece probably intersects itself; repair it, or inspect without "
+                               f"--union (overlaps then count twice)")
 
 
 def _manifold(mf, w: Welded, rows: np.ndarray, reverse: bool):
