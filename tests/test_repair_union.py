@@ -241,3 +241,28 @@ def test_modes_combine_in_order_fill_then_unite_then_wall():
     assert wall.properties.mass == pytest.approx(7.0 * 0.01 * 42, rel=1e-14)
     assert wall.repairs["union"].volume_after == pytest.approx(15.0, rel=1e-14)
     np.testing.assert_allclose(wall.properties.center_of_mass, [1.5, 1.5, 1.5], atol=1e-14)
+
+
+def test_two_spheres_union_is_bracketed_by_the_closed_form_of_balls():
+    """Two icospheres (circumradius 1) 1 apart. Each contains the ball of its inradius and lies in
+    the unit ball, so their union's volume lies between the unions of two balls of those radii:
+    2 (4/3) π r³ minus the lens π (4r + d)(2r - d)² / 12. The icosphere is symmetric under each
+    coordinate's reflection, so the union's centre of mass is the midpoint and J_xy = 0."""
+    d = 1.0
+    one = icosphere(3)
+    tri = one.vertices[one.faces]
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    r_in = float(np.min(np.abs(np.einsum("ij,ij->i", normal, tri[:, 0]))
+                        / np.linalg.norm(normal, axis=1)))
+
+    def balls(r):
+        return 2 * 4 / 3 * np.pi * r**3 - np.pi * (4 * r + d) * (2 * r - d) ** 2 / 12
+
+    result = inspect_mesh(join(one, moved(one, shift=(d, 0, 0))), repairs=UNION)
+    p = result.properties
+    b = bars(p)
+    assert balls(r_in) - b["volume"] <= p.volume <= balls(1.0) + b["volume"]
+    np.testing.assert_allclose(p.center_of_mass, [d / 2, 0, 0], atol=b["center_of_mass"].max()
+                               + 1e-14)
+    assert abs(p.inertia[0, 1]) <= b["inertia"][0, 1] + 1e-14
+    assert result.repairs["union"].as_dict()["counted_twice"] > 0
