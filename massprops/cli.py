@@ -204,7 +204,7 @@ def align(ctx: click.Context, input_path: str, output_path: str, density: float 
         else:
             from massprops.report import print_alignment
 
-            print_alignment(input_path, output_path, aligned)
+            print_alignment(input_path, output_path, aligned, result.repairs)
 
     ctx.exit(_guarded(ctx, run))
 

@@ -118,8 +118,10 @@ def print_inspection(result) -> None:
     _console.print(inspection_renderable(result))
 
 
-def print_alignment(input_path: str, output_path: str, alignment) -> None:
-    """Summary of `massprops align`: the map written and the moments that are now diagonal."""
+def print_alignment(input_path: str, output_path: str, alignment, repairs: dict | None = None
+                    ) -> None:
+    """Summary of `massprops align`: the map written and the moments that are now diagonal (and
+    what a repair did to the mesh that was written)."""
     t = Table(show_header=False, box=None, padding=(0, 2),
               title=Text(f"{input_path} → {output_path}", style="bold"), title_justify="left")
     _row(t, "map", "v ↦ rotation · v + translation")
@@ -127,6 +129,8 @@ def print_alignment(input_path: str, output_path: str, alignment) -> None:
     _row(t, "principal moments [kg·m²]", _vector(alignment.principal_moments, 0.0))
     _console.print(t)
     _console.print(_matrix(alignment.rotation, 0.0, "rotation (rows: principal axes)"))
+    if repairs:
+        _console.print(_repairs_table(repairs))
 
 
 def print_simulation(scene, result) -> None:
