@@ -376,7 +376,9 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
             n_open = a.edges.count("open" if rewind.any() else "unbalanced")
             from massprops.repair.holes import describe_holes  # the error path only
 
-            holes = describe_holes(mesh)
+            holes = describe_holes(a.edges, mesh.vertices[a.reps],
+                                   area_vector_sums(mesh.vertices, mesh.faces)[1],
+                                   open_only=bool(rewind.any()))
             raise MeshTopologyError(f"{mesh.name}: mesh is not closed: "
                                     f"{n_open} boundary edges (total length "
                                     f"{_boundary_length(mesh, a):.6g} m"

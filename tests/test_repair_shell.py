@@ -22,7 +22,7 @@ from repair_meshes import (
 from test_repair_union import bars
 
 from massprops.analysis import inspect_mesh
-from massprops.errors import DegenerateMeshError, UsageError
+from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError
 from massprops.mesh import Mesh
 from massprops.repair import RepairOptions
 from massprops.repair.shell import shell_properties
@@ -170,6 +170,10 @@ def test_refusals():
     line = Mesh(np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0.0]]), np.array([[0, 1, 2]]), name="l")
     with pytest.raises(DegenerateMeshError, match="l: the surface has no area"):
         shell_properties(line, 0.01)
+    bad = fan_disc(regular_polygon(4, 1.0))
+    bad.vertices[0, 0] = np.nan
+    with pytest.raises(MeshFormatError, match="disc: expected finite vertex coordinates"):
+        shell_properties(bad, 0.01)
 
 
 def test_a_thick_wall_is_warned():

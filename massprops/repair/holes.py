@@ -44,7 +44,7 @@ from massprops.repair.triangulate import (
     min_area,
     plane_frame,
 )
-from massprops.surface import consistent_flips
+from massprops.surface import Edges, connected_components, consistent_flips
 from massprops.tolerances import HOLE_CREASE_ANGLE_DEG, MAX_HOLE_AREA_FRACTION
 
 
@@ -154,26 +154,39 @@ def fill_holes(mesh: Mesh, *, max_fraction: float | None = None,
     return HoleResult(closed, record, spread, np.array(areas), np.array(tilts), warnings)
 
 
-def describe_holes(mesh: Mesh) -> str | None:
-    """A few words on the holes of an open mesh for the "not closed" error: how many loops and
-    the largest's edges and vector area (Newell) against the surface area; None if the loops
-    cannot be traced (the surface is one-sided)."""
-    try:
-        w, faces = _wound(mesh)
-    except MeshTopologyError:
+def describe_holes(edges: Edges, positions: np.ndarray, surface: float, *,
+                   open_only: bool = False) -> str | None:
+    """A few words on the holes of an open mesh for the "not closed" error: how many boundary
+    loops, and the largest's edges and vector area against the surface area (m²).
+
+    edges : the health check's `massprops.surface.Edges` of the welded mesh; positions (u, 3):
+    the position of each welded id; open_only : take the edges used once (the mesh was re-wound,
+    so directions in ``edges`` are the file's) rather than the unbalanced ones. This is the
+    default path's error message: vectorised, no loop in Python over the edges; the loops are the
+    components of the boundary graph, each one's Newell vector area summed from its edges in any
+    order (the surface's direction along the rim: consistent within a loop)."""
+    if edges.forward is None:
         return None
-    loops = _loops(w, faces)
-    if not loops:
+    pick = (edges.uses == 1) if open_only else (edges.imbalance != 0)
+    k = np.flatnonzero(pick)
+    if not k.size:
         return None
-    surface = float(_areas(mesh.vertices, faces).sum())
-    size = []
-    for loop in loops:
-        p = w.positions[loop.ids]
-        p = p - p.mean(axis=0)
-        size.append(float(np.linalg.norm(np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0))) / 2)
+    ahead = edges.imbalance[k] > 0
+    a = np.where(ahead, edges.u[k], edges.v[k]).astype(np.int64)
+    b = np.where(ahead, edges.v[k], edges.u[k]).astype(np.int64)
+    n = positions.shape[0]
+    root = connected_components(n, edges.u[k], edges.v[k])[a]  # u < v: the kernel's fast case
+    counts = np.bincount(root, minlength=n)
+    n_loops = int(np.count_nonzero(counts))
+    origin = positions[a[0]]  # about a rim point: small products
+    p, q = positions[a] - origin, positions[b] - origin
+    size = np.zeros(n)
+    for i, j in ((1, 2), (2, 0), (0, 1)):
+        size += np.bincount(root, weights=p[:, i] * q[:, j] - p[:, j] * q[:, i], minlength=n) ** 2
+    size = np.sqrt(size) / 2
     big = int(np.argmax(size))
-    many = "1 boundary loop" if len(loops) == 1 else f"{len(loops)} boundary loops"
-    return (f"{many}, the largest of {loops[big].ids.size} edges spanning {size[big]:.3g} m² "
+    many = "1 boundary loop" if n_loops == 1 else f"{n_loops} boundary loops"
+    return (f"{many}, the largest of {counts[big]} edges spanning {size[big]:.3g} m² "
             f"({_percent(size[big], surface)} of the surface area)")
 
 
@@ -201,29 +214,41 @@ def _wound(mesh: Mesh) -> tuple[Welded, np.ndarray]:
     return w, faces
 
 
-def _loops(w: Welded, faces: np.ndarray) -> list[_Loop]:
-    """The rims in cap order: the unbalanced directed edges reversed, chained end to start."""
+def _rim_edges(w: Welded) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cap's edges a -> b (welded ids) and the surface triangle along each: one per excess
+    use of an edge in one direction (the surface runs b -> a once too often)."""
     e = w.edges
     use_edge = np.repeat(np.arange(e.count.size), e.count)
     fwd = np.bincount(use_edge, weights=e.forward, minlength=e.count.size).astype(np.int64)
     imbalance = 2 * fwd - e.count  # forward minus backward uses
-    out_edges = defaultdict(list)  # cap edge a -> b: the surface runs b -> a once too often
-    for k in np.flatnonzero(imbalance):
-        uses = np.arange(e.start[k], e.start[k] + e.count[k])
-        # the rim runs u -> v when forward uses are in excess; the cap runs the other way
-        a, b = (e.v[k], e.u[k]) if imbalance[k] > 0 else (e.u[k], e.v[k])
-        side = e.forward[uses] == (imbalance[k] > 0)
-        face = int(e.face[uses[side][0]])
-        for _ in range(abs(int(imbalance[k]))):
-            out_edges[int(a)].append((int(b), face))
+    open_ = np.flatnonzero(imbalance)
+    excess = imbalance[open_] > 0
+    # the surface runs u -> v when forward uses are in excess; the cap runs the other way
+    a = np.where(excess, e.v[open_], e.u[open_])
+    b = np.where(excess, e.u[open_], e.v[open_])
+    # a use in the excess direction: the first such use of each open edge
+    uses = np.flatnonzero((imbalance[use_edge] != 0)
+                          & (e.forward == (imbalance[use_edge] > 0)))
+    first = np.unique(use_edge[uses], return_index=True)[1]
+    face = e.face[uses[first]]
+    times = np.abs(imbalance[open_])
+    return np.repeat(a, times), np.repeat(b, times), np.repeat(face, times)
+
+
+def _loops(w: Welded, faces: np.ndarray) -> list[_Loop]:
+    """The rims in cap order: the cap edges chained end to start."""
+    a, b, face = _rim_edges(w)
+    out_edges = defaultdict(list)
+    for i, j, f in zip(a.tolist(), b.tolist(), face.tolist()):
+        out_edges[i].append((j, f))
     loops = []
     for start in sorted(out_edges):
         while out_edges[start]:
             ids, owners, at = [], [], start
             while out_edges[at]:
-                nxt, face = out_edges[at].pop()
+                nxt, f = out_edges[at].pop()
                 ids.append(at)
-                owners.append(face)
+                owners.append(f)
                 at = nxt
                 if at == start:
                     break

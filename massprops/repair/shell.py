@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from massprops.errors import DegenerateMeshError, UsageError
+from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError
 from massprops.facesums import BLOCK, U, gamma
 from massprops.inertia import parallel_axis_to_com
 from massprops.mass import (
@@ -108,6 +108,9 @@ def shell_properties(mesh: Mesh, thickness: float, *, density: float | None = No
         raise DegenerateMeshError(f"{mesh.name}: the surface has no area (no triangle with three "
                                   f"distinct corners); --shell needs a surface")
     used = mesh.vertices[mesh.faces[rows]].reshape(-1, 3)
+    if not np.isfinite(used).all():
+        raise MeshFormatError(f"{mesh.name}: expected finite vertex coordinates, got NaN or "
+                              f"infinity; fix or re-export the file")
     origin = (used.min(axis=0) + used.max(axis=0)) / 2
     faces = _face_terms(mesh, rows, origin, thickness)
     if faces.area <= 0:
