@@ -117,11 +117,11 @@ def overlap_warning(mesh: Mesh, volumes: np.ndarray, overlaps: list[tuple[int, i
     try:
         w = Welded.of(mesh)
         composed = _compose(w, split_pieces(w))
-        united = composed.result.volume() + sum(float(split) for split in composed.skipped_volumes)
+        united = composed.result.volume() + sum(composed.skipped_volumes)
     except ImportError:
         united = None
-    if united is not None:
-        extra = total - united
+    if united is not None and -1e-9 * abs(total) <= total - united <= abs(total):
+        extra = max(total - united, 0.0)  # else the boolean misbehaved: give the bound below
         return (f"the pieces share {extra:.3g} m³ ({_percent(extra, total)} of the {total:.6g} m³ "
                 f"reported), measured from their union: that volume is counted more than once; "
                 f"--union counts it once")
