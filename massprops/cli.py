@@ -81,8 +81,17 @@ def _non_negative(ctx: click.Context, param: click.Parameter,
     return value
 
 
+def _fraction(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    import math
+
+    if value is not None and not (math.isfinite(value) and 0 < value <= 1):
+        raise click.BadParameter(f"must be a fraction in (0, 1], got {value!r}")
+    return value
+
+
 def mass_options(f: Callable) -> Callable:
-    """--density / --mass / --unit / --allow-open / --input-format, shared by inspect and align."""
+    """--density / --mass / --unit / --allow-open / --input-format and the repairs (--union,
+    --shell, --fill-holes, --max-hole), shared by inspect and align."""
     for opt in reversed([
         click.option("--density", type=float, callback=_positive,
                      help="Density in kg/m³ (default 1)."),
@@ -95,6 +104,18 @@ def mass_options(f: Callable) -> Callable:
                           "warnings say by how much)."),
         click.option("--input-format", default=None,
                      help="Format of the input (required for '-' = standard input)."),
+        click.option("--fill-holes", is_flag=True,
+                     help="Cap each hole (boundary loop) with a triangulation that keeps its "
+                          "shape; the error bar covers the choice of cap."),
+        click.option("--max-hole", type=float, callback=_fraction, metavar="FRACTION",
+                     help="With --fill-holes: the largest cap accepted, as a fraction of the "
+                          "surface area (default 0.1); larger loops are openings and refused."),
+        click.option("--union", is_flag=True,
+                     help="Replace overlapping or nested pieces by the solid they occupy "
+                          "together (cavities stay empty), instead of counting overlaps twice."),
+        click.option("--shell", type=float, callback=_positive, metavar="THICKNESS",
+                     help="The surface as a wall of this thickness, in METRES whatever --unit "
+                          "says (mid-surface model; open and flat surfaces too)."),
     ]):
         f = opt(f)
     return f
@@ -103,6 +124,17 @@ def mass_options(f: Callable) -> Callable:
 def _check_mass_options(density: float | None, total_mass: float | None) -> None:
     if density is not None and total_mass is not None:
         raise click.UsageError("give --density or --mass, not both")
+
+
+def _repairs(fill_holes: bool, max_hole: float | None, union: bool, shell: float | None):
+    """The library's RepairOptions, or None when no repair is asked (nothing imported then)."""
+    if max_hole is not None and not fill_holes:
+        raise click.UsageError("--max-hole applies to --fill-holes; add --fill-holes")
+    if not (fill_holes or union or shell is not None):
+        return None
+    from massprops.repair import RepairOptions
+
+    return RepairOptions(union=union, shell=shell, fill_holes=fill_holes, max_hole=max_hole)
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -128,12 +160,14 @@ def cli(ctx: click.Context, debug: bool) -> None:
 @click.pass_context
 def inspect(ctx: click.Context, meshes: tuple[str, ...], density: float | None,
             total_mass: float | None, unit: str, allow_open: bool, input_format: str | None,
+            fill_holes: bool, max_hole: float | None, union: bool, shell: float | None,
             as_json: bool, output_format: str, principal: bool) -> None:
     """Mass, centre of mass, inertia tensor, principal moments and axes of each MESH.
 
     MESH is a file (OBJ, STL, .vf/.vtx/.fac, PLY, OFF, ...) or '-' for standard input.
     """
     _check_mass_options(density, total_mass)
+    repairs = _repairs(fill_holes, max_hole, union, shell)
     if "-" in meshes and input_format is None:
         raise click.UsageError("reading standard input ('-') needs --input-format")
     if as_json and output_format not in ("table", "json"):
@@ -148,7 +182,8 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], density: float | None,
         source = sys.stdin.buffer if path == "-" else path
         result = inspect_file(source, format=input_format, unit=unit,
                               name="<stdin>" if path == "-" else path,
-                              density=density, mass=total_mass, allow_open=allow_open)
+                              density=density, mass=total_mass, allow_open=allow_open,
+                              repairs=repairs)
         for w in result.warnings:
             _say_warning(result.mesh.name, w)
         if as_json:
@@ -229,10 +264,13 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
 @click.pass_context
 def align(ctx: click.Context, input_path: str, output_path: str, density: float | None,
           total_mass: float | None, unit: str, allow_open: bool, input_format: str | None,
+          fill_holes: bool, max_hole: float | None, union: bool, shell: float | None,
           force: bool, as_json: bool) -> None:
     """Write OUT: the mesh IN moved into its principal frame (COM at the origin, axes along the
-    principal axes, ascending moments). Faces and winding are unchanged."""
+    principal axes, ascending moments). Faces and winding are unchanged; with --union OUT is
+    the united mesh, with --fill-holes the capped one."""
     _check_mass_options(density, total_mass)
+    repairs = _repairs(fill_holes, max_hole, union, shell)
 
     def run() -> None:
         from massprops.align import align_mesh
@@ -240,17 +278,19 @@ def align(ctx: click.Context, input_path: str, output_path: str, density: float 
         from massprops.io import write_mesh
 
         result = inspect_file(input_path, format=input_format, unit=unit, density=density,
-                              mass=total_mass, allow_open=allow_open)
+                              mass=total_mass, allow_open=allow_open, repairs=repairs)
         for w in result.warnings:
             _say_warning(result.mesh.name, w)
         aligned = align_mesh(result.mesh, result.properties)
         write_mesh(aligned.mesh, output_path, force=force, protect=(input_path,))
         if as_json:
-            _emit_json({"input": input_path, "output": output_path, **aligned.as_dict()})
+            extra = {} if result.repairs is None else {
+                "repairs": {key: record.as_dict() for key, record in result.repairs.items()}}
+            _emit_json({"input": input_path, "output": output_path, **aligned.as_dict(), **extra})
         else:
             from massprops.report import print_alignment
 
-            print_alignment(input_path, output_path, aligned)
+            print_alignment(input_path, output_path, aligned, result.repairs)
 
     ctx.exit(_guarded(ctx, run))
 

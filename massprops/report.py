@@ -58,17 +58,20 @@ def _bar(e: np.ndarray | float) -> str:
 def inspection_renderable(result) -> Group:
     """A rich renderable for one `massprops.analysis.Inspection`."""
     p, h = result.properties, result.health
-    rnd, inp = p.uncertainty.rounding, p.uncertainty.input
+    bars = [b for b in (p.uncertainty.rounding, p.uncertainty.input, p.uncertainty.repair)
+            if b is not None]
 
     def bound(name: str) -> np.ndarray:
-        b = np.asarray(getattr(rnd, name), dtype=float)
-        return b + np.asarray(getattr(inp, name), dtype=float) if inp is not None else b
+        return sum(np.asarray(getattr(b, name), dtype=float) for b in bars)
+
+    kinds = ["round-off"] + (["float32 input"] if p.uncertainty.input is not None else []) + (
+        ["repair"] if p.uncertainty.repair is not None else [])
 
     head = Table(show_header=True, header_style="bold", box=None, padding=(0, 2),
                  title=Text(result.mesh.name, style="bold"), title_justify="left")
     head.add_column("quantity")
     head.add_column("value")
-    head.add_column("error bar" + (" (round-off + float32 input)" if inp is not None else ""))
+    head.add_column("error bar" + (f" ({' + '.join(kinds)})" if len(kinds) > 1 else ""))
     _row(head, "volume [m³]", fmt(p.volume, float(bound("volume"))), _bar(bound("volume")))
     _row(head, "mass [kg]", fmt(p.mass, float(bound("mass"))), _bar(bound("mass")))
     _row(head, "density [kg/m³]", fmt(p.density), "")
@@ -90,18 +93,35 @@ def inspection_renderable(result) -> Group:
         _row(mesh, key, str(value))
 
     parts = [head, Text(""), j, Text(""), axes, Text(""), mesh]
+    if getattr(result, "repairs", None):
+        parts += [Text(""), _repairs_table(result.repairs)]
     if result.warnings:
         parts.append(Text(""))
         parts.extend(Text(f"warning: {w}", style="yellow") for w in result.warnings)
     return Group(*parts, Text(""))
 
 
+def _repairs_table(repairs: dict) -> Table:
+    """What each repair did: one row per key of its record."""
+    t = Table(show_header=False, box=None, padding=(0, 2), title="repairs", title_justify="left")
+    for name, record in repairs.items():
+        for key, value in record.as_dict().items():
+            if isinstance(value, float):
+                value = fmt(value)
+            elif isinstance(value, list):
+                value = "; ".join(str(v) for v in value) or "none"
+            _row(t, f"{name}.{key}", str(value))
+    return t
+
+
 def print_inspection(result) -> None:
     _console.print(inspection_renderable(result))
 
 
-def print_alignment(input_path: str, output_path: str, alignment) -> None:
-    """Summary of `massprops align`: the map written and the moments that are now diagonal."""
+def print_alignment(input_path: str, output_path: str, alignment, repairs: dict | None = None
+                    ) -> None:
+    """Summary of `massprops align`: the map written and the moments that are now diagonal (and
+    what a repair did to the mesh that was written)."""
     t = Table(show_header=False, box=None, padding=(0, 2),
               title=Text(f"{input_path} → {output_path}", style="bold"), title_justify="left")
     _row(t, "map", "v ↦ rotation · v + translation")
@@ -109,6 +129,8 @@ def print_alignment(input_path: str, output_path: str, alignment) -> None:
     _row(t, "principal moments [kg·m²]", _vector(alignment.principal_moments, 0.0))
     _console.print(t)
     _console.print(_matrix(alignment.rotation, 0.0, "rotation (rows: principal axes)"))
+    if repairs:
+        _console.print(_repairs_table(repairs))
 
 
 def print_simulation(scene, result) -> None:
