@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 from massprops.errors import MassPropsError
 from massprops.health import MeshHealth, prepare_mesh
@@ -12,6 +12,9 @@ from massprops.io import read_mesh
 from massprops.mass import MassProperties, mass_properties
 from massprops.mesh import Mesh
 from massprops.parallel import in_background
+
+if TYPE_CHECKING:
+    from massprops.repair import RepairOptions
 
 OVERLAP_TRIANGLES = 1 << 15
 """From this many triangles on, the integral starts on a second thread beside the health checks:
@@ -22,14 +25,19 @@ most meshes pass them unchanged, and then its result is the one a later call wou
 class Inspection:
     """What `massprops inspect` reports for one mesh.
 
-    mesh : the mesh that was integrated (flipped or re-wound where health said so).
-    health : topology report of the mesh as read, with its warnings.
+    mesh : the mesh that was integrated (flipped or re-wound where health said so; capped or
+        united by a repair; for ``--shell``, the wall's mid-surface).
+    health : topology report of the mesh as read (see `massprops.repair.pipeline` for what a
+        repair reports), with its warnings.
     properties : mass properties about the centre of mass, mesh axes, SI units.
+    repairs : None unless a repair ran: {"fill_holes" | "union" | "shell": record}, each record
+        with ``as_dict()`` (the ``repairs`` JSON object).
     """
 
     mesh: Mesh
     health: MeshHealth
     properties: MassProperties
+    repairs: dict | None = None
 
     @property
     def warnings(self) -> tuple[str, ...]:
@@ -40,19 +48,28 @@ class Inspection:
         out = {"file": self.mesh.name}
         out.update(self.properties.as_dict())
         out["mesh"] = self.health.as_dict()
-        if self.health.weld is not None:
-            out["repairs"] = {"weld": self.health.weld.as_dict()}
+        repairs = {} if self.health.weld is None else {"weld": self.health.weld}
+        repairs.update(self.repairs or {})
+        if repairs:
+            out["repairs"] = {key: record.as_dict() for key, record in repairs.items()}
         out["warnings"] = list(self.warnings)
         return out
 
 
 def inspect_mesh(mesh: Mesh, *, density: float | None = None, mass: float | None = None,
-                 allow_open: bool = False) -> Inspection:
+                 allow_open: bool = False, repairs: RepairOptions | None = None) -> Inspection:
     """Health-check ``mesh`` and integrate its mass properties (density default 1 kg/m³).
 
     Errors of the health checks come first; the integral's own errors (a usage error in density
-    or mass, a degenerate volume) only for a mesh that passed them.
+    or mass, a degenerate volume) only for a mesh that passed them. ``repairs``: what to repair
+    first (`massprops.repair`); none asked, the repair code is never imported.
     """
+    if repairs is not None and repairs.any:
+        from massprops.repair.pipeline import repair_and_integrate
+
+        done = repair_and_integrate(mesh, repairs, density=density, mass=mass,
+                                    allow_open=allow_open)
+        return Inspection(done.mesh, done.health, done.properties, done.repairs)
     if mesh.faces.shape[0] < OVERLAP_TRIANGLES:
         fixed, health = prepare_mesh(mesh, allow_open=allow_open)
         return Inspection(fixed, health, mass_properties(fixed, density=density, mass=mass))
@@ -70,10 +87,11 @@ def inspect_mesh(mesh: Mesh, *, density: float | None = None, mass: float | None
 
 def inspect_file(source: str | os.PathLike | BinaryIO, *, format: str | None = None,
                  unit: str = "m", name: str | None = None, density: float | None = None,
-                 mass: float | None = None, allow_open: bool = False) -> Inspection:
+                 mass: float | None = None, allow_open: bool = False,
+                 repairs: RepairOptions | None = None) -> Inspection:
     """Read a mesh file (or binary stream, with ``format``) and inspect it; see `inspect_mesh`."""
     mesh = read_mesh(source, format=format, unit=unit, name=name)
-    return inspect_mesh(mesh, density=density, mass=mass, allow_open=allow_open)
+    return inspect_mesh(mesh, density=density, mass=mass, allow_open=allow_open, repairs=repairs)
 
 
 def _outcome(mesh: Mesh, density: float | None, mass: float | None

@@ -10,7 +10,7 @@ import contextlib
 import gc
 import json
 import sys
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import click
@@ -21,6 +21,14 @@ from massprops.errors import UsageError, error_message, exit_code
 UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")
 """The keys of massprops.io.UNITS, written out so that building the CLI does not import the
 readers (tests/test_cli.py checks the two agree)."""
+
+ELEMENT_FORMATS = ("urdf", "sdf", "mjcf")
+"""The keys of massprops.robot.elements.WRITERS, written out so that ``inspect`` never imports
+the robot package to build its options (tests/test_robot_cli.py checks the two agree)."""
+
+INSPECT_FORMATS = ("table", "json", "csv", *ELEMENT_FORMATS)
+"""inspect --format: the human table, one JSON object per line, CSV (massprops.batch.table), the
+robot formats' <inertial> elements."""
 
 
 def _say_error(message: str) -> None:
@@ -58,8 +66,26 @@ def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -
     return value
 
 
+def _non_negative(ctx: click.Context, param: click.Parameter,
+                  value: float | None) -> float | None:
+    import math
+
+    if value is not None and not (math.isfinite(value) and value >= 0):
+        raise click.BadParameter(f"must be a finite number >= 0, got {value!r}")
+    return value
+
+
+def _fraction(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    import math
+
+    if value is not None and not (math.isfinite(value) and 0 < value <= 1):
+        raise click.BadParameter(f"must be a fraction in (0, 1], got {value!r}")
+    return value
+
+
 def mass_options(f: Callable) -> Callable:
-    """--density / --mass / --unit / --allow-open / --input-format, shared by inspect and align."""
+    """--density / --mass / --unit / --allow-open / --input-format and the repairs (--union,
+    --shell, --fill-holes, --max-hole), shared by inspect and align."""
     for opt in reversed([
         click.option("--density", type=float, callback=_positive,
                      help="Density in kg/m³ (default 1)."),
@@ -72,6 +98,18 @@ def mass_options(f: Callable) -> Callable:
                           "warnings say by how much)."),
         click.option("--input-format", default=None,
                      help="Format of the input (required for '-' = standard input)."),
+        click.option("--fill-holes", is_flag=True,
+                     help="Cap each hole (boundary loop) with a triangulation that keeps its "
+                          "shape; the error bar covers the choice of cap."),
+        click.option("--max-hole", type=float, callback=_fraction, metavar="FRACTION",
+                     help="With --fill-holes: the largest cap accepted, as a fraction of the "
+                          "surface area (default 0.1); larger loops are openings and refused."),
+        click.option("--union", is_flag=True,
+                     help="Replace overlapping or nested pieces by the solid they occupy "
+                          "together (cavities stay empty), instead of counting overlaps twice."),
+        click.option("--shell", type=float, callback=_positive, metavar="THICKNESS",
+                     help="The surface as a wall of this thickness, in METRES whatever --unit "
+                          "says (mid-surface model; open and flat surfaces too)."),
     ]):
         f = opt(f)
     return f
@@ -80,6 +118,17 @@ def mass_options(f: Callable) -> Callable:
 def _check_mass_options(density: float | None, total_mass: float | None) -> None:
     if density is not None and total_mass is not None:
         raise click.UsageError("give --density or --mass, not both")
+
+
+def _repairs(fill_holes: bool, max_hole: float | None, union: bool, shell: float | None):
+    """The library's RepairOptions, or None when no repair is asked (nothing imported then)."""
+    if max_hole is not None and not fill_holes:
+        raise click.UsageError("--max-hole applies to --fill-holes; add --fill-holes")
+    if not (fill_holes or union or shell is not None):
+        return None
+    from massprops.repair import RepairOptions
+
+    return RepairOptions(union=union, shell=shell, fill_holes=fill_holes, max_hole=max_hole)
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -92,12 +141,21 @@ def cli(ctx: click.Context, debug: bool) -> None:
     ctx.obj["debug"] = debug
 
 
-OUTPUT_FORMATS = ("table", "json", "csv")
-"""inspect --format: human table, one JSON object per line, CSV (massprops.batch.table)."""
-
 _RENAMED = {"total_mass": "mass", "input_format": "format"}
 """CLI option names that differ from inspect_file's keyword arguments; every other shared mesh
 option reaches inspect_file (and the batch workers) under its own name."""
+
+_REPAIR_OPTIONS = ("fill_holes", "max_hole", "union", "shell")
+"""The mesh options inspect_file takes together, as one ``repairs=RepairOptions``."""
+
+
+def _inspect_kwargs(mesh_options: dict[str, Any]) -> dict[str, Any]:
+    """inspect_file's keyword arguments from the shared mesh options (`mass_options`)."""
+    options = {_RENAMED.get(k, k): v for k, v in mesh_options.items()
+               if k not in _REPAIR_OPTIONS}
+    _check_mass_options(options["density"], options["mass"])
+    options["repairs"] = _repairs(*(mesh_options[k] for k in _REPAIR_OPTIONS))
+    return options
 
 
 @cli.command()
@@ -105,10 +163,13 @@ option reaches inspect_file (and the batch workers) under its own name."""
 @mass_options
 @click.option("--json", "as_json", is_flag=True,
               help="One JSON object per mesh, one per line (the same as --format json).")
-@click.option("--format", "output_format", type=click.Choice(OUTPUT_FORMATS), default="table",
+@click.option("--format", "output_format", type=click.Choice(INSPECT_FORMATS), default="table",
               show_default=True,
-              help="table: for people; json: one object per line; csv: a header and one row "
-                   "per mesh (columns in the README).")
+              help="table: for people; json (= --json): one object per line; csv: a header and "
+                   "one row per mesh (columns in the README); urdf/sdf/mjcf: the format's "
+                   "<inertial> element per mesh (about the COM, mesh axes, round-trip digits).")
+@click.option("--principal", is_flag=True,
+              help="With --format mjcf: quat + diaginertia instead of fullinertia.")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,
               help="Worker processes [default: the cores this process may use]. 1: one "
                    "process, as before; a small batch runs in one process anyway.")
@@ -124,8 +185,8 @@ option reaches inspect_file (and the batch workers) under its own name."""
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary line.")
 @click.pass_context
 def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_format: str,
-            jobs: int | None, recursive: bool, files_from: str | None, null: bool,
-            scheduler: str | None, quiet: bool, **mesh_options: Any) -> None:
+            principal: bool, jobs: int | None, recursive: bool, files_from: str | None,
+            null: bool, scheduler: str | None, quiet: bool, **mesh_options: Any) -> None:
     """Mass, centre of mass, inertia tensor, principal moments and axes of each MESH.
 
     MESH is a file (OBJ, STL, .vf/.vtx/.fac, PLY, OFF, ...), '-' for standard input, a
@@ -133,10 +194,12 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
     ('parts/**/*.stl'). Results come in input order; a file that fails is reported and the
     others go on; the exit code is the worst.
     """
-    options = {_RENAMED.get(k, k): v for k, v in mesh_options.items()}
-    _check_mass_options(options["density"], options["mass"])
+    options = _inspect_kwargs(mesh_options)
     if as_json and output_format not in ("table", "json"):
-        raise click.UsageError(f"--json and --format {output_format} contradict; give one")
+        raise click.UsageError(f"--json is --format json; give one of --json and --format "
+                               f"{output_format}")
+    if principal and output_format != "mjcf":
+        raise click.UsageError("--principal goes with --format mjcf (quat + diaginertia)")
     out_format = "json" if as_json else output_format
     if not meshes and files_from is None:
         raise click.UsageError("give MESH arguments or --files-from FILE")
@@ -166,7 +229,7 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
             ctx.exit(exit_code(exc))
     try:
         batch = inspect_many(inputs, executor, jobs=jobs, workers=workers, **options)
-        code = _report_batch(ctx, batch, out_format, summary, quiet)
+        code = _report_batch(ctx, batch, out_format, summary, quiet, principal)
     finally:
         if client is not None:
             client.close()
@@ -177,7 +240,7 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
 
 
 def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool,
-                  quiet: bool) -> int:
+                  quiet: bool, principal: bool) -> int:
     """Print every record of ``batch`` as it comes; the worst exit code. Ctrl-C: print what
     was finished, the summary, and let main() exit 130."""
     import time
@@ -191,7 +254,7 @@ def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool
     counts = {"done": 0, "failed": 0, "worst": 0}
 
     def show(record: Any) -> None:
-        code = _show_record(ctx, record, out_format)
+        code = _show_record(ctx, record, out_format, principal)
         counts["failed" if code else "done"] += 1
         counts["worst"] = max(counts["worst"], code)
 
@@ -282,7 +345,7 @@ class RemoteError(Exception):
     """--debug: an input failed in a worker process; the message is the worker's traceback."""
 
 
-def _show_record(ctx: click.Context, record: Any, out_format: str) -> int:
+def _show_record(ctx: click.Context, record: Any, out_format: str, principal: bool) -> int:
     """Print one record (warnings and errors on stderr); its exit code."""
     error = record.error
     if error is not None:
@@ -304,10 +367,18 @@ def _show_record(ctx: click.Context, record: Any, out_format: str) -> int:
             from massprops.batch.table import csv_row
 
             _to_stdout(lambda: _echo_text(csv_row(record)))
+        elif out_format in ELEMENT_FORMATS:
+            from massprops.robot.elements import WRITERS
+
+            d = record.data
+            _to_stdout(lambda: click.echo(f"<!-- {record.file} -->"))
+            element = WRITERS[out_format](d["mass"], d["center_of_mass"], d["inertia"],
+                                          principal=principal)
+            _to_stdout(lambda: click.echo(element))
         else:
             from massprops.report import print_inspection
 
-            _to_stdout(lambda: print_inspection(record.data))
+            _to_stdout(lambda: print_inspection(record.data, record.repaired))
 
     return _guarded(ctx, emit)
 
@@ -342,6 +413,58 @@ def _echo_text(text: str) -> None:
 
 
 @cli.command()
+@click.argument("description", metavar="FILE")
+@click.option("--json", "as_json", is_flag=True, help="One JSON object per link, one per line.")
+@click.option("--check", "rtol", type=float, default=None, metavar="RTOL",
+              callback=_non_negative,
+              help="Exit 4 if any link's stated inertial differs from its geometry by more than "
+                   "RTOL (mass, COM / link size, inertia in the 2-norm; all relative).")
+@click.option("--write", "output_path", default=None, metavar="OUT",
+              help="Write the description with the computed inertials (never over FILE).")
+@click.option("--force", is_flag=True, help="Replace OUT if it exists (never FILE).")
+@click.option("--from", "source", type=click.Choice(("collision", "visual")),
+              default="collision", show_default=True, help="Which geometry makes the link.")
+@click.option("--density", type=float, callback=_positive,
+              help="Density in kg/m³ for every geometry (default: keep each stated mass).")
+@click.option("--package-path", "package_paths", multiple=True, metavar="DIR",
+              help="Folder holding packages for package:// and model:// (repeatable; "
+                   "ROS_PACKAGE_PATH is searched too).")
+@click.option("--allow-open", is_flag=True, help="Compute open meshes anyway (with warnings).")
+@click.pass_context
+def model(ctx: click.Context, description: str, as_json: bool, rtol: float | None,
+          output_path: str | None, force: bool, source: str, density: float | None,
+          package_paths: tuple[str, ...], allow_open: bool) -> None:
+    """Inertials of every link of a robot description (URDF, SDF or MJCF FILE) from its meshes
+    and primitives, against the inertials it states."""
+    link_errors = []
+
+    def run() -> None:
+        from massprops.robot.analyze import analyze_model
+
+        report = analyze_model(description, source=source, density=density,
+                               package_paths=package_paths, allow_open=allow_open)
+        for w in report.model.warnings:
+            _say_warning(description, w)
+        for line in report.errors:
+            _say_error(line)
+        link_errors.extend(report.errors)
+        if as_json:
+            for r in report.links:
+                _emit_json(r.as_dict(description))
+        else:
+            from massprops.report import print_model
+
+            print_model(report, rtol)
+        if output_path is not None:
+            report.write(output_path, force=force)
+        if rtol is not None:
+            report.require_agreement(rtol)
+
+    code = _guarded(ctx, run)
+    ctx.exit(max(code, 1 if link_errors else 0))
+
+
+@cli.command()
 @click.argument("input_path", metavar="IN")
 @click.argument("output_path", metavar="OUT")
 @mass_options
@@ -350,10 +473,13 @@ def _echo_text(text: str) -> None:
 @click.pass_context
 def align(ctx: click.Context, input_path: str, output_path: str, density: float | None,
           total_mass: float | None, unit: str, allow_open: bool, input_format: str | None,
+          fill_holes: bool, max_hole: float | None, union: bool, shell: float | None,
           force: bool, as_json: bool) -> None:
     """Write OUT: the mesh IN moved into its principal frame (COM at the origin, axes along the
-    principal axes, ascending moments). Faces and winding are unchanged."""
+    principal axes, ascending moments). Faces and winding are unchanged; with --union OUT is
+    the united mesh, with --fill-holes the capped one."""
     _check_mass_options(density, total_mass)
+    repairs = _repairs(fill_holes, max_hole, union, shell)
 
     def run() -> None:
         from massprops.align import align_mesh
@@ -361,17 +487,19 @@ def align(ctx: click.Context, input_path: str, output_path: str, density: float 
         from massprops.io import write_mesh
 
         result = inspect_file(input_path, format=input_format, unit=unit, density=density,
-                              mass=total_mass, allow_open=allow_open)
+                              mass=total_mass, allow_open=allow_open, repairs=repairs)
         for w in result.warnings:
             _say_warning(result.mesh.name, w)
         aligned = align_mesh(result.mesh, result.properties)
         write_mesh(aligned.mesh, output_path, force=force, protect=(input_path,))
         if as_json:
-            _emit_json({"input": input_path, "output": output_path, **aligned.as_dict()})
+            extra = {} if result.repairs is None else {
+                "repairs": {key: record.as_dict() for key, record in result.repairs.items()}}
+            _emit_json({"input": input_path, "output": output_path, **aligned.as_dict(), **extra})
         else:
             from massprops.report import print_alignment
 
-            print_alignment(input_path, output_path, aligned)
+            print_alignment(input_path, output_path, aligned, result.repairs)
 
     ctx.exit(_guarded(ctx, run))
 
@@ -556,14 +684,6 @@ def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
         from massprops.dynamics.plots import plot_simulation
 
         plot_simulation(result, plot_path, force=force, protect=protect)
-
-
-def _worst(ctx: click.Context, items: Iterable[str], fn: Callable[[str], None]) -> int:
-    """Run ``fn`` on each item, reporting each failure; the exit code is the worst one."""
-    worst = 0
-    for item in items:
-        worst = max(worst, _guarded(ctx, lambda item=item: fn(item)))
-    return worst
 
 
 def main(argv: list[str] | None = None) -> None:

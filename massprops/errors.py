@@ -50,6 +50,11 @@ class OutputExistsError(InputError, FileExistsError):
     """The output file exists (use --force) or would overwrite an input."""
 
 
+class RobotModelError(InputError, ValueError):
+    """A robot description (URDF, SDF, MJCF) cannot be used: malformed XML, a joint loop, an
+    unknown attribute value; the message names the file, the element and its line."""
+
+
 # --- exit 2: usage -------------------------------------------------------------------------------
 class UsageError(MassPropsError, ValueError):
     """Options that contradict each other or are out of range (exit 2)."""
@@ -71,11 +76,19 @@ class DivergenceError(ComputationError):
         self.partial = partial
 
 
-#: The contract's exit-code table; the three branches are disjoint, so order does not matter.
+# --- exit 4: a check ran, and what was checked disagrees -----------------------------------------
+class CheckFailedError(MassPropsError):
+    """A requested check ran on valid inputs and failed (``model --check``: a stated inertial
+    differs from the computed one by more than the tolerance). Not bad input: the input was read
+    and understood; it is the description that is wrong (exit 4)."""
+
+
+#: The contract's exit-code table; the four branches are disjoint, so order does not matter.
 EXIT_CODES: dict[type[MassPropsError], int] = {
     InputError: 1,
     UsageError: 2,
     ComputationError: 3,
+    CheckFailedError: 4,
 }
 EXIT_INTERRUPTED = 130
 

@@ -293,9 +293,10 @@ def _health(mesh: Mesh, a: _Analysis, volumes: np.ndarray, *, flipped: bool = Fa
 
 
 # --- orientation of the pieces ------------------------------------------------------------------
-def _plan_warnings(plan: Plan, volumes: np.ndarray, quiet: np.ndarray) -> list[str]:
+def _plan_warnings(plan: Plan, volumes: np.ndarray, quiet: np.ndarray, unioned: bool = False
+                   ) -> list[str]:
     """Warnings for the plan, at most 5 of a kind; components in ``quiet`` were re-wound and are
-    reported as such."""
+    reported as such; overlaps are not warned about when the caller unites the pieces."""
     k = volumes.size
     out = []
     if plan.whole and not np.all(quiet):
@@ -306,7 +307,7 @@ def _plan_warnings(plan: Plan, volumes: np.ndarray, quiet: np.ndarray) -> list[s
                             for c in np.flatnonzero(plan.flip & ~quiet)])
     out += _first_five([f"components {o + 1} and {i + 1} overlap or nest (a vertex of {i + 1} "
                         f"lies inside {o + 1}): the volume they share is counted twice"
-                        for o, i in plan.overlaps])
+                        for o, i in ([] if unioned else plan.overlaps)])
     out += _first_five([f"component {c + 1} (a cavity: faces inward) is partly outside every "
                         f"solid part: that part is subtracted from nothing" for c in plan.loose])
     return out
@@ -349,33 +350,56 @@ def _reverse(mesh: Mesh, flip: np.ndarray) -> Mesh:
 
 
 # --- round-off cracks ----------------------------------------------------------------------------
-def _close_cracks(mesh: Mesh, a: _Analysis
+def close_cracks(mesh: Mesh) -> tuple[Mesh, CrackWeld | None, list[str]]:
+    """``mesh`` with its round-off cracks welded and zero-area faces' edges set aside wherever
+    that removes open edges, even if real holes remain (for ``--fill-holes``, which then caps only
+    the real holes); the weld's report and the warnings. A closed mesh comes back as it is."""
+    a = _analyse(mesh)
+    if not a.edges.count("open"):
+        return mesh, None, []
+    welded, _, report, notes = _close_cracks(mesh, a, partial=True)
+    return welded, report, notes
+
+
+def _close_cracks(mesh: Mesh, a: _Analysis, *, partial: bool = False
                   ) -> tuple[Mesh, _Analysis, CrackWeld | None, list[str]]:
     """A mesh whose open edges are round-off only, closed: first exactly zero-area faces left out
     of the topology (a collinear sliver adds edges no face balances, and encloses nothing), then
     the two sides of round-off cracks welded (`tolerances.NEAR_WELD_ULPS`). Each step is kept only
-    if it leaves no open edge; otherwise (a real gap) the mesh and analysis come back unchanged."""
-    flat = _exactly_flat(mesh, a)
-    b = _analyse(mesh, flat) if flat.any() else a
-    notes = [f"left {_count(int(np.count_nonzero(flat)), 'zero-area face')} (corners on one "
-             f"line) out of the topology: they enclose nothing"] if flat.any() else []
-    if b.edges.count("open") == 0:
-        return mesh, b, None, notes
+    if it leaves no open edge; otherwise (a real gap) the mesh and analysis come back unchanged.
+    ``partial``: the weld is kept if it leaves fewer open edges (the slivers' own edges are then
+    left to the caller, as tiny loops)."""
+    def fewer_open(b: _Analysis, than: _Analysis) -> bool:
+        left = b.edges.count("open")
+        return left == 0 or (partial and left < than.edges.count("open"))
+
+    b, flat = a, _exactly_flat(mesh, a)
+    if flat.any():
+        trial = _analyse(mesh, flat)
+        if trial.edges.count("open") == 0:
+            return mesh, trial, None, [_flat_note(flat)]
+        if partial:
+            b = trial
     welded, weld_report = _weld_cracks(mesh, b)
     if welded is None:
         return mesh, a, None, []
     flat = _exactly_flat(welded, _analyse(welded))
     c = _analyse(welded, flat)
-    if c.edges.count("open"):
+    if not fewer_open(c, b):
         return mesh, a, None, []
-    notes = [f"closed round-off cracks: welded {_count(weld_report.vertices, 'vertex position')} "
-             f"onto copies at most {weld_report.max_distance:.3g} m away (tolerance "
-             f"{weld_report.tolerance:.3g} m, {NEAR_WELD_ULPS} ulps of the largest coordinate); "
-             f"the input error bar covers the move"]
-    if flat.any():
-        notes.append(f"left {_count(int(np.count_nonzero(flat)), 'zero-area face')} (corners on "
-                     f"one line) out of the topology: they enclose nothing")
+    moved = _count(weld_report.vertices, "vertex position")
+    notes = [f"closed round-off cracks: welded {moved} onto copies at most "
+             f"{weld_report.max_distance:.3g} m away (tolerance {weld_report.tolerance:.3g} m, "
+             f"{NEAR_WELD_ULPS} ulps of the largest coordinate); the input error bar covers the "
+             f"move"]
+    if flat.any() and not partial:
+        notes.append(_flat_note(flat))
     return welded, c, weld_report, notes
+
+
+def _flat_note(flat: np.ndarray) -> str:
+    return (f"left {_count(int(np.count_nonzero(flat)), 'zero-area face')} (corners on one line) "
+            f"out of the topology: they enclose nothing")
 
 
 def _exactly_flat(mesh: Mesh, a: _Analysis) -> np.ndarray:
@@ -427,11 +451,14 @@ def check_mesh(mesh: Mesh) -> MeshHealth:
     return _health(mesh, a, volumes, warnings=warnings + _shape_notes(a))
 
 
-def prepare_mesh(mesh: Mesh, *, allow_open: bool = False) -> tuple[Mesh, MeshHealth]:
+def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
+                 ) -> tuple[Mesh, MeshHealth]:
     """The mesh to integrate, and its health (topology as read; volumes and repairs as returned).
 
     Closed and outward: returned unchanged (the same object). Inside out: flipped. An inverted
     part: flipped. Inconsistent winding on a 2-manifold: re-wound. Overlapping parts: warned.
+    ``unioned``: the caller replaces the pieces by their union (``massprops.repair.union``), so
+    overlaps are neither warned about nor measured.
     Raises MeshTopologyError if the mesh has no faces, is one-sided, or is open (boundary edges,
     or non-manifold edges used unequally each way) unless ``allow_open``; DegenerateMeshError if
     its faces use fewer than 4 distinct positions; MeshFormatError for out-of-range indices.
@@ -467,10 +494,17 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False) -> tuple[Mesh, MeshHea
     if not closed:
         if not allow_open:
             n_open = a.edges.count("open" if rewind.any() else "unbalanced")
+            from massprops.repair.holes import describe_holes  # the error path only
+
+            holes = describe_holes(a.edges, mesh.vertices[a.reps],
+                                   area_vector_sums(mesh.vertices, mesh.faces)[1],
+                                   open_only=bool(rewind.any()))
             raise MeshTopologyError(f"{mesh.name}: mesh is not closed: "
                                     f"{n_open} boundary edges (total length "
-                                    f"{_boundary_length(mesh, a):.6g} m); use --allow-open to "
-                                    f"compute anyway")
+                                    f"{_boundary_length(mesh, a):.6g} m"
+                                    f"{'' if holes is None else ' in ' + holes}); use "
+                                    f"--fill-holes to cap them, or --allow-open to compute "
+                                    f"anyway")
         # Volumes of an open surface depend on the origin: take them about the box centre.
         centre = _box_centre(mesh, a)
         det6 = np.where(rewind, -1.0, 1.0) * signed_volumes6(
@@ -486,9 +520,14 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False) -> tuple[Mesh, MeshHea
         plan = orientation_plan(volumes, sample_windings(mesh.vertices, mesh.faces, a.tri, piece,
                                                          a.n_comp))
     touched = np.bincount(a.face_comp[rewind], minlength=a.n_comp) > 0
-    warnings += _plan_warnings(plan, volumes, touched)
+    warnings += _plan_warnings(plan, volumes, touched, unioned)
     flip = rewind ^ np.append(plan.flip, False)[a.face_comp]  # face_comp -1: no component
     fixed = _reverse(mesh, flip) if flip.any() else mesh
+    if plan.overlaps and not unioned:  # measured on the oriented pieces; lazily: rare, costly
+        from massprops.repair.union import overlap_warning
+
+        warnings.append(overlap_warning(fixed, volumes * np.where(plan.flip, -1.0, 1.0),
+                                        plan.overlaps))
     poly = _polygon_of_triangle(mesh)
     changed = np.bincount(poly, weights=flip, minlength=mesh.n_faces) > 0
     in_touched = np.bincount(poly, weights=np.append(touched, False)[a.face_comp],

@@ -24,6 +24,7 @@ of vertices the health checks moved to close round-off cracks (``Mesh.vertex_dis
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -36,7 +37,8 @@ from massprops.inertia import parallel_axis_to_com, principal_axes
 from massprops.mesh import Mesh
 from massprops.tolerances import MIN_VOLUME_TO_ERROR
 
-__all__ = ["ErrorBars", "MassProperties", "Uncertainty", "mass_properties"]
+__all__ = ["ErrorBars", "MassProperties", "Uncertainty", "UnitMoments", "mass_properties",
+           "properties_from_moments"]
 
 _FAST_DET_TARGET = 1e-14
 """Fast determinants are kept when their error bound is below this fraction of |Σ d|."""
@@ -71,14 +73,21 @@ class ErrorBars:
     """rounding : bounds of this computation's floating-point error against the exact values of
     the stored vertices. input : None unless the file stored float32 coordinates or vertices were
     welded across round-off cracks; then bounds of the change caused by every coordinate moving
-    by half a float32 ulp (times the unit factor) plus the welding's largest move."""
+    by half a float32 ulp (times the unit factor) plus the welding's largest move.
+    repair : None unless a repair (``massprops.repair``) changed what was integrated; then bounds
+    of what the repair leaves uncertain (a boolean's rounding, the choice of a hole's cap, the
+    thin-wall model), reported under ``"repair"`` only then."""
 
     rounding: Uncertainty
     input: Uncertainty | None = None
+    repair: Uncertainty | None = None
 
     def as_dict(self) -> dict:
-        return {"rounding": self.rounding.as_dict(),
-                "input": None if self.input is None else self.input.as_dict()}
+        out = {"rounding": self.rounding.as_dict(),
+               "input": None if self.input is None else self.input.as_dict()}
+        if self.repair is not None:
+            out["repair"] = self.repair.as_dict()
+        return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,12 +133,27 @@ def mass_properties(mesh: Mesh, *, density: float | None = None,
     coordinates, bad indices), DegenerateMeshError (no resolvable volume, or inside out),
     ComputationError (coordinates so large that the products overflow).
     """
-    _check_density_mass(density, mass)
+    check_density_mass(density, mass)
     _check_faces(mesh)
     area = mesh.coordinate_dtype == np.float32 or mesh.vertex_displacement > 0
     origin, sums = _integrate(mesh, area)
     mo = _moments(sums, reach_of(sums), mesh.name)
 
+    props = properties_from_moments(origin, mo, density=density, mass=mass)
+    if not area:
+        return props
+    data_err = _input_uncertainty(mesh, origin + sums.lowest, origin + sums.highest, sums.area,
+                                  mo.volume, props.center_of_mass, props.density, props.inertia,
+                                  mass is not None)
+    return dataclasses.replace(props, uncertainty=ErrorBars(props.uncertainty.rounding, data_err))
+
+
+def properties_from_moments(origin: np.ndarray, mo: UnitMoments, *, density: float | None,
+                            mass: float | None) -> MassProperties:
+    """Mass properties from unit-density moments about ``origin`` (3,) m, with the rounding bars
+    (``uncertainty.input`` None). Shared with solids that are not a closed mesh's interior (the
+    thin wall of ``massprops.repair.shell``); ``density``/``mass`` as in `mass_properties`,
+    already checked."""
     rho, rho_rel = (1.0 if density is None else float(density)), 0.0   # rho_rel: its error
     if mass is not None:
         rho, rho_rel = float(mass) / mo.volume, mo.volume_err / mo.volume + U
@@ -147,13 +171,8 @@ def mass_properties(mesh: Mesh, *, density: float | None = None,
     com_err = mo.com_local_err + np.spacing(np.abs(com)) / 2
     rounding = Uncertainty(float(mo.volume_err), float(total_err), _frozen(com_err),
                            _frozen(inertia_err), _frozen(moments_err))
-    data_err = None
-    if area:  # float32 coordinates or welded cracks: the input's own uncertainty
-        data_err = _input_uncertainty(mesh, origin + sums.lowest, origin + sums.highest,
-                                      sums.area, mo.volume, com, rho, inertia, mass is not None)
     return MassProperties(float(mo.volume), float(total), float(rho), _frozen(com),
-                          _frozen(inertia), _frozen(moments), _frozen(axes),
-                          ErrorBars(rounding, data_err))
+                          _frozen(inertia), _frozen(moments), _frozen(axes), ErrorBars(rounding))
 
 
 def _integrate(mesh: Mesh, area: bool) -> tuple[np.ndarray, FaceSums]:
@@ -175,7 +194,7 @@ def _integrate(mesh: Mesh, area: bool) -> tuple[np.ndarray, FaceSums]:
 
 
 # --- input checks --------------------------------------------------------------------------
-def _check_density_mass(density: float | None, mass: float | None) -> None:
+def check_density_mass(density: float | None, mass: float | None) -> None:
     if density is not None and mass is not None:
         raise UsageError("give a density or a mass, not both (the other follows from the volume)")
     for name, value in (("density", density), ("mass", mass)):
@@ -202,7 +221,7 @@ def _origin_estimate(vertices: np.ndarray) -> np.ndarray:
 
 
 # --- from the sums to the moments about the centre of mass, with rounding bounds ------------------
-class _Moments(NamedTuple):
+class UnitMoments(NamedTuple):
     """Unit density: volume m³, com_local (3,) m from the origin, inertia (3, 3) m⁵ about the
     COM, each with its absolute rounding bound."""
 
@@ -214,7 +233,7 @@ class _Moments(NamedTuple):
     inertia_err: np.ndarray
 
 
-def _moments(sums: FaceSums, reach: np.ndarray, name: str) -> _Moments:
+def _moments(sums: FaceSums, reach: np.ndarray, name: str) -> UnitMoments:
     """Volume, COM and inertia about the COM from the face totals, with error bounds.
 
     Each summand is d times a factor bounded through the reach h: |s_i| <= 3 h_i, |f_i| <= 6 h_i²,
@@ -251,7 +270,7 @@ def _moments(sums: FaceSums, reach: np.ndarray, name: str) -> _Moments:
     shift_err[np.diag_indices(3)] = ((volume_err + 4 * U * volume) * other
                                      + volume * (np.roll(sq_err, 1) + np.roll(sq_err, 2)))
     inertia_err = j_o_err + shift_err + U * np.abs(inertia)
-    return _Moments(volume, volume_err, com, com_err, inertia, inertia_err)
+    return UnitMoments(volume, volume_err, com, com_err, inertia, inertia_err)
 
 
 def _tensor(second: np.ndarray, products: np.ndarray) -> np.ndarray:

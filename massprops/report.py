@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -56,23 +57,27 @@ def _bar(e: np.ndarray | float) -> str:
     return f"± {float(np.max(e)):.1e}"
 
 
-def inspection_renderable(data: dict) -> Group:
+def inspection_renderable(data: dict, repaired: Iterable[str] | None = None) -> Group:
     """A rich renderable for one inspection, given as its JSON object
-    (`massprops.analysis.Inspection.as_dict`, or a batch record's ``data``)."""
-    rnd, inp = data["uncertainty"]["rounding"], data["uncertainty"]["input"]
+    (`massprops.analysis.Inspection.as_dict`, or a batch record's ``data``). ``repaired``: the
+    keys of ``data["repairs"]`` to list (the repairs that were asked for; default: all)."""
+    bars = [b for b in (data["uncertainty"]["rounding"], data["uncertainty"]["input"],
+                        data["uncertainty"].get("repair")) if b is not None]
 
     def value(name: str) -> np.ndarray:
         return np.asarray(data[name], dtype=float)
 
     def bound(name: str) -> np.ndarray:
-        b = np.asarray(rnd[name], dtype=float)
-        return b + np.asarray(inp[name], dtype=float) if inp is not None else b
+        return sum(np.asarray(b[name], dtype=float) for b in bars)
+
+    kinds = ["round-off"] + (["float32 input"] if data["uncertainty"]["input"] is not None
+                             else []) + (["repair"] if "repair" in data["uncertainty"] else [])
 
     head = Table(show_header=True, header_style="bold", box=None, padding=(0, 2),
                  title=Text(data["file"], style="bold"), title_justify="left")
     head.add_column("quantity")
     head.add_column("value")
-    head.add_column("error bar" + (" (round-off + float32 input)" if inp is not None else ""))
+    head.add_column("error bar" + (f" ({' + '.join(kinds)})" if len(kinds) > 1 else ""))
     _row(head, "volume [m³]", fmt(data["volume"], float(bound("volume"))), _bar(bound("volume")))
     _row(head, "mass [kg]", fmt(data["mass"], float(bound("mass"))), _bar(bound("mass")))
     _row(head, "density [kg/m³]", fmt(data["density"]), "")
@@ -94,19 +99,38 @@ def inspection_renderable(data: dict) -> Group:
         _row(mesh, key, str(item))
 
     parts = [head, Text(""), j, Text(""), axes, Text(""), mesh]
+    repairs = data.get("repairs") or {}
+    shown = {k: repairs[k] for k in (repairs if repaired is None else repaired)}
+    if shown:
+        parts += [Text(""), _repairs_table(shown)]
     if data["warnings"]:
         parts.append(Text(""))
         parts.extend(Text(f"warning: {w}", style="yellow") for w in data["warnings"])
     return Group(*parts, Text(""))
 
 
-def print_inspection(data: dict) -> None:
+def _repairs_table(repairs: dict) -> Table:
+    """What each repair did: one row per key of its JSON record."""
+    t = Table(show_header=False, box=None, padding=(0, 2), title="repairs", title_justify="left")
+    for name, record in repairs.items():
+        for key, value in record.items():
+            if isinstance(value, float):
+                value = fmt(value)
+            elif isinstance(value, list):
+                value = "; ".join(str(v) for v in value) or "none"
+            _row(t, f"{name}.{key}", str(value))
+    return t
+
+
+def print_inspection(data: dict, repaired: Iterable[str] | None = None) -> None:
     """Print one inspection (its JSON object) as the human table."""
-    _console.print(inspection_renderable(data))
+    _console.print(inspection_renderable(data, repaired))
 
 
-def print_alignment(input_path: str, output_path: str, alignment) -> None:
-    """Summary of `massprops align`: the map written and the moments that are now diagonal."""
+def print_alignment(input_path: str, output_path: str, alignment, repairs: dict | None = None
+                    ) -> None:
+    """Summary of `massprops align`: the map written and the moments that are now diagonal (and
+    what a repair did to the mesh that was written)."""
     t = Table(show_header=False, box=None, padding=(0, 2),
               title=Text(f"{input_path} → {output_path}", style="bold"), title_justify="left")
     _row(t, "map", "v ↦ rotation · v + translation")
@@ -114,6 +138,8 @@ def print_alignment(input_path: str, output_path: str, alignment) -> None:
     _row(t, "principal moments [kg·m²]", _vector(alignment.principal_moments, 0.0))
     _console.print(t)
     _console.print(_matrix(alignment.rotation, 0.0, "rotation (rows: principal axes)"))
+    if repairs:
+        _console.print(_repairs_table({k: r.as_dict() for k, r in repairs.items()}))
 
 
 def print_simulation(scene, result) -> None:
@@ -162,6 +188,35 @@ def print_precision(name: str, report) -> None:
     acc = ref.get("accuracy")
     _console.print(f"reference: {ref['kind']} ({ref['checked']}); its accuracy ~ "
                    f"{acc:.1e}" if acc is not None else f"reference: {ref['kind']}")
+
+
+def print_model(report, rtol: float | None = None) -> None:
+    """`massprops model`: one row per link, stated against computed (rtol marks the failures)."""
+    t = Table(title=Text(f"{report.name} ({report.model.format})", style="bold"),
+              title_justify="left", box=None, padding=(0, 2), header_style="bold")
+    for col in ("link", "mass [kg]", "mass off", "COM off [m]", "of size", "inertia off",
+                "axes [°]", "valid", "check"):
+        t.add_column(col, justify="left" if col == "link" else "right", no_wrap=True)
+    notes = []
+    for r in report.links:
+        if r.computed is None:
+            _row(t, r.name, "", "", "", "", "", "", "", "skipped")
+            notes.append(f"{r.name}: {r.reason}")
+            continue
+        c, cmp = r.computed, r.comparison
+        if cmp is None:
+            _row(t, r.name, f"{c.mass:.6g}", "", "", "", "", "", "", "not stated")
+        else:
+            angle = "" if cmp.axes_angle is None else f"{math.degrees(cmp.axes_angle):.3g}"
+            verdict = "" if rtol is None else ("ok" if cmp.passes(rtol) else "FAIL")
+            _row(t, r.name, f"{c.mass:.6g}", f"{cmp.mass_rel:.2%}", f"{cmp.com_offset:.3g}",
+                 f"{cmp.com_rel:.2%}", f"{cmp.inertia_rel:.2%}", angle,
+                 "yes" if not cmp.problems else "NO", verdict)
+            notes.extend(f"{r.name}: stated {p}" for p in cmp.problems)
+        notes.extend(f"{r.name}: {w}" for w in r.warnings)
+    _console.print(t)
+    for n in notes:
+        _console.print(Text(n, style="yellow"))
 
 
 class BatchProgress:

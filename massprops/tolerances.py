@@ -38,3 +38,34 @@ robot parts. Eight ulps welds those and nothing a modeller could have meant: a r
 part is many orders above 1e-15 of its coordinates, and trimesh's fixed 1e-8 m is a guess that
 merges real features of a small part and misses the cracks of a large one. The weld is bounded
 too: only groups no wider than the tolerance are welded, and only if that leaves no open edge."""
+
+INERTIA_VALIDITY_RTOL = 1e-12
+"""A stated inertia tensor counts as physically valid when it is symmetric, its smallest principal
+moment is positive, and each principal moment is at most the sum of the other two, each within
+this fraction of the largest moment. Writers print floats in repr, so a tensor massprops wrote
+comes back exact; 1e-12 leaves room for a tensor that was rounded to ~12 digits by another tool
+(a thin rod or disc sits exactly on the triangle inequality's edge) while a placeholder that
+breaks it does so by percent."""
+MAX_HOLE_AREA_FRACTION = 0.1
+"""``--fill-holes`` caps a boundary loop only if its cap is at most this fraction of the surface
+area (``--max-hole`` overrides). Holes from scanning and export are small (well under 1 % of the
+surface); a loop whose cap would be a tenth of the part is an opening (a cup, a bowl, a pipe's
+end) or a missing face that the user should decide about: capping it would be a guess about a
+large part of the boundary. A cube missing one face (a fifth of what remains) needs the override."""
+
+HOLE_CREASE_ANGLE_DEG = 45.0
+"""A face on a hole's rim tilted less than this from the cap's plane continues the surface across
+the hole (a hole in a curved patch): the reasonable caps then include a dome continuing its slope,
+and the error bar covers it. A steeper face meets the hole at a crease (the cube missing a face:
+90°), where the surface turns rather than continues, and adds no dome."""
+
+SHELL_WARN_FRACTION = 0.01
+"""``--shell`` warns when the thin-wall model's error bound exceeds this fraction of the mass or
+of a principal moment: the wall is thick against the surface's curvature or its facets (or the
+thickness was given in the file's unit instead of metres)."""
+
+RIM_NORMAL_RTOL = 1e-9
+"""A hole's rim whose vector area (Newell) is below this fraction of its points' spread
+Σ|p - c|² has no reliable normal (a figure of eight, a rim folded onto itself); its best-fit
+plane is then the direction of least spread. Round-off in the vector area is ~1e-16 of that
+spread, seven orders below; a real rim that flat is a sliver with no sensible cap plane anyway."""

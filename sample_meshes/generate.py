@@ -81,11 +81,26 @@ def polyhedral_torus(n: int = 24, major: float = 2.0, half: float = 0.5) -> Mesh
     return mesh(v, quads, "torus")
 
 
+def overlapping_boxes() -> Mesh:
+    """Two cubes in one file that overlap (for --union): [0, 2]³ and [1, 3]³, sharing [1, 2]³."""
+    a = box_vertices((2.0, 2.0, 2.0), (1.0, 1.0, 1.0))
+    b = box_vertices((2.0, 2.0, 2.0), (2.0, 2.0, 2.0))
+    quads = BOX_QUADS + [[i + 8 for i in q] for q in BOX_QUADS]
+    return mesh(np.vstack([a, b]), quads, "overlapping_boxes")
+
+
+def open_box() -> Mesh:
+    """The unit cube [0, 1]³ without its top face (z = 1): a tray, for --fill-holes and --shell."""
+    return mesh(box_vertices((1.0, 1.0, 1.0), (0.5, 0.5, 0.5)),
+                [q for q in BOX_QUADS if q != [4, 5, 7, 6]], "open_box")
+
+
 def main() -> None:
     cub = notes_cuboid()
     for ext in ("vf", "vtx", "obj", "stl"):
         write_mesh(cub, HERE / f"cuboid.{ext}", force=True)
-    for shape in (cube(), tetrahedron(), hexagonal_prism(), polyhedral_torus()):
+    for shape in (cube(), tetrahedron(), hexagonal_prism(), polyhedral_torus(),
+                  overlapping_boxes(), open_box()):
         write_mesh(shape, HERE / f"{shape.name}.obj", force=True)
 
 

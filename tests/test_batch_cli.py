@@ -41,7 +41,7 @@ def sequential(paths, out_format="json", **options) -> tuple[str, str, int]:
             out.write(json.dumps(result.as_dict(), allow_nan=False) + "\n")
         else:
             with contextlib.redirect_stdout(out):
-                print_inspection(result.as_dict())
+                print_inspection(result.as_dict(), tuple(result.repairs or ()))
     return out.getvalue(), "".join(err), worst
 
 
@@ -306,3 +306,24 @@ def test_debug_raises_the_error_with_its_traceback(run, tmp_path, pool_always):
         run("--debug", "inspect", "--json", "--jobs", "1", *paths)
     with pytest.raises(RemoteError, match=r"(?s)Traceback.*MeshFormatError: .*b\.obj"):
         run("--debug", "inspect", "--json", "--jobs", "2", *paths)  # a worker's, as text
+
+
+@pytest.mark.timeout(90)
+@pytest.mark.parametrize("args", [
+    ["--format", "urdf", "--mass", "1.3"],
+    ["--format", "mjcf", "--principal"],
+    ["--union"],
+    ["--fill-holes", "--max-hole", "0.3", "--json"],
+    ["--shell", "0.002", "--density", "7850"],
+], ids=["urdf", "mjcf-principal", "union-table", "fill-holes-json", "shell-table"])
+def test_robot_formats_and_repairs_in_workers_print_the_bytes_of_one_process(
+        run, pool_always, args):
+    """The other inspect options reach the workers unchanged (repairs as one RepairOptions) and
+    every renderer works from the records (the repairs table lists what was asked for)."""
+    paths = [SAMPLES / n for n in ("overlapping_boxes.obj", "open_box.obj", "cuboid.stl",
+                                   "torus.obj", "cube.obj")]
+    one = run("inspect", *args, "--jobs", "1", *paths)
+    two = run("inspect", *args, "--jobs", "2", *paths)
+    assert pool_always == [2]
+    assert (two.stdout, two.stderr, two.exit_code) == (one.stdout, one.stderr, one.exit_code)
+    assert one.stdout

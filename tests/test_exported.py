@@ -232,3 +232,19 @@ def test_open_after_every_repair_names_the_gap(tmp_path):
     path.write_text("\n".join(text[:-1] + ["f 1 1 2"]) + "\n")
     with pytest.raises(MeshTopologyError, match="not closed"):
         inspect_file(path)
+
+
+def test_fill_holes_welds_the_cracks_and_caps_only_the_real_hole(tmp_path, run):
+    """A cracked box missing one face: the cracks are welded (not capped as slivers of holes),
+    the missing face is the one hole, and the result is the intended box within its bars."""
+    corners = box_corners((0.1, -0.2, 0.3))
+    text = per_face_obj(corners, 2).splitlines()
+    path = tmp_path / "cracked_open.obj"
+    path.write_text("\n".join(text[:-1]) + "\n")
+    result = run("inspect", path, "--json", "--fill-holes", "--max-hole", "0.5")
+    assert result.exit_code == 0, result.stderr
+    (out,) = json_lines(result.stdout)
+    assert out["repairs"]["weld"]["vertices"] > 0
+    assert out["repairs"]["fill_holes"]["holes"] == 1
+    assert "closed round-off cracks" in result.stderr
+    assert_equals_within_bars(out, corners)

@@ -176,9 +176,13 @@ def test_overlapping_positive_parts_are_warned_counted_twice(inner):
     assert fixed is mesh and not health.flipped
     inner_volume = float(np.prod(np.subtract(inner[1], inner[0])))
     assert health.component_volumes == pytest.approx((8.0, inner_volume))
-    assert len(health.warnings) == 1
+    assert len(health.warnings) == 2
     assert health.warnings[0].startswith("components 1 and 2 overlap or nest")
     assert "counted twice" in health.warnings[0]
+    # the shared volume, measured from the union: the inner box lies inside [0, 2]³ up to 2
+    shared = float(np.prod(np.minimum(inner[1], 2) - np.maximum(inner[0], 0)))
+    assert health.warnings[1].startswith(f"the pieces share {shared:.3g} m³ (")
+    assert health.warnings[1].endswith("counted more than once; --union counts it once")
 
 
 def test_inverted_outer_shell_around_a_good_cavity_is_flipped_alone():
@@ -212,8 +216,10 @@ def test_open_cube_is_refused_with_the_gap_counted():
     mesh = from_polygons(corners(), CUBE_QUADS[1:], "open.obj")
     with pytest.raises(MeshTopologyError) as err:
         prepare_mesh(mesh)
-    assert str(err.value) == ("open.obj: mesh is not closed: 4 boundary edges (total length 4 m); "
-                              "use --allow-open to compute anyway")
+    assert str(err.value) == ("open.obj: mesh is not closed: 4 boundary edges (total length 4 m "
+                              "in 1 boundary loop, the largest of 4 edges spanning 1 m² (20% of "
+                              "the surface area)); use --fill-holes to cap them, or --allow-open "
+                              "to compute anyway")
     fixed, health = prepare_mesh(mesh, allow_open=True)
     assert fixed is mesh
     assert_health(health, dict(closed=False, boundary_edges=4, manifold=False, nonmanifold_edges=0,

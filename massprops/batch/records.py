@@ -52,12 +52,15 @@ class MeshResult:
         lists, SI units, inertia about the COM in the mesh's axes), or None if it failed.
     warnings : one line each, as printed after ``massprops: warning: <file>: ``.
     error : why it failed, or None.
+    repaired : the keys of ``data["repairs"]`` that repairs asked for produced (what the human
+        table lists; a weld by the health check alone is reported in the JSON only).
     """
 
     file: str
     data: dict[str, Any] | None
     warnings: tuple[str, ...] = ()
     error: ErrorInfo | None = None
+    repaired: tuple[str, ...] = ()
 
     @property
     def exit_code(self) -> int:
@@ -80,6 +83,7 @@ def inspect_one(path: str | os.PathLike, options: dict[str, Any], *, name: str |
     label = "<stdin>" if stdin else (os.fsdecode(path) if name is None else name)
     try:
         result = inspect_file(sys.stdin.buffer if stdin else path, name=label, **options)
-        return MeshResult(label, result.as_dict(), result.warnings)
+        return MeshResult(label, result.as_dict(), result.warnings,
+                          repaired=tuple(result.repairs or ()))
     except Exception as exc:  # reported in the record: one bad file never stops a batch
         return MeshResult.failed(label, exc, keep=keep_exception)

@@ -63,7 +63,8 @@ OUTPUT_SUFFIXES: tuple[str, ...] = (".csv", ".npz")
 
 # --- the body -----------------------------------------------------------------------------------
 _EXPLICIT_BODY_KEYS = ("mass", "inertia", "center_of_mass")
-_MESH_BODY_KEYS = ("mesh", "density", "mass", "unit", "allow_open")
+_MESH_BODY_KEYS = ("mesh", "density", "mass", "unit", "allow_open", "union", "shell",
+                   "fill_holes")
 _BODY_EXAMPLE = ("body: {mesh: part.obj, density: 7850} or "
                  "body: {mass: 12.0, inertia: [[8, 0, 0], [0, 13, 0], [0, 0, 13]]}")
 
@@ -77,6 +78,7 @@ class _MeshBodySpec:
     unit: str
     allow_open: bool
     amount: dict[str, float]  # {"density": rho} or {"mass": m}
+    repairs: dict = dataclasses.field(default_factory=dict)  # massprops.repair.RepairOptions
 
 
 def _body_spec(field: Field, base_dir: Path) -> RigidBody | _MeshBodySpec:
@@ -119,7 +121,10 @@ def _mesh_body_spec(fields: dict[str, Field], base_dir: Path) -> _MeshBodySpec:
         amount = {"mass": read_positive(fields["mass"])}
     else:  # the same default as ``inspect``
         amount = {"density": read_positive(fields["density"]) if "density" in fields else 1.0}
-    return _MeshBodySpec(fields["mesh"], path, unit, allow_open, amount)
+    repairs = {key: read_boolean(fields[key]) for key in ("union", "fill_holes") if key in fields}
+    if "shell" in fields:
+        repairs["shell"] = read_positive(fields["shell"])  # metres, as every scene value
+    return _MeshBodySpec(fields["mesh"], path, unit, allow_open, amount, repairs)
 
 
 def _existing_file(field: Field, base_dir: Path) -> Path:
@@ -141,14 +146,14 @@ def _mesh_body(spec: _MeshBodySpec) -> tuple[RigidBody, tuple[str, ...]]:
     """Read, check and integrate the mesh: the body and the health check's warnings. Errors keep
     their class, prefixed with our place."""
     # Imported here: the mesh pipeline is heavy and only mesh bodies need it.
-    from massprops.health import prepare_mesh
+    from massprops.analysis import inspect_mesh
     from massprops.io import read_mesh
-    from massprops.mass import mass_properties
+    from massprops.repair import RepairOptions
 
     try:
-        mesh, health = prepare_mesh(read_mesh(spec.path, unit=spec.unit),
-                                     allow_open=spec.allow_open)
-        props = mass_properties(mesh, **spec.amount)
+        result = inspect_mesh(read_mesh(spec.path, unit=spec.unit), allow_open=spec.allow_open,
+                              repairs=RepairOptions(**spec.repairs), **spec.amount)
+        mesh, health, props = result.mesh, result.health, result.properties
     except InputError as exc:
         raise _with_place(exc, spec.field) from exc
     axes = np.asarray(props.principal_axes, dtype=np.float64)
@@ -172,7 +177,8 @@ def _with_place(exc: InputError, field: Field) -> InputError:
     """The same error class (so callers can still tell an open mesh from a bad scene), its
     message prefixed with the scene file, line and key path."""
     # The mesh modules word their fixes for the command line; in a scene the option is a key.
-    message = one_line(field.where() + str(exc).replace("--allow-open", "allow_open: true"))
+    message = one_line(field.where() + str(exc).replace("--allow-open", "allow_open: true")
+                       .replace("--fill-holes", "fill_holes: true"))
     try:
         return type(exc)(message)
     except TypeError:  # a subclass with a different constructor

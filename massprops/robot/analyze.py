@@ -1,0 +1,205 @@
+"""``massprops model``: a whole description, link by link, stated against computed.
+
+`analyze_model` is the CLI's single call; `ModelReport.write` and `ModelReport.require_agreement`
+serve ``--write`` and ``--check``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from massprops.errors import CheckFailedError, MassPropsError, RobotModelError, UsageError
+from massprops.robot.combine import LinkMass, MeshCache, combine, integrate_geometry
+from massprops.robot.compare import Comparison, compare, validity_problems
+from massprops.robot.model import Link, RobotModel
+from massprops.robot.xmltree import parse_xml
+
+__all__ = ["LinkReport", "ModelReport", "analyze_model", "load_model", "FORMATS_BY_ROOT"]
+
+SOURCES = ("collision", "visual")
+
+FORMATS_BY_ROOT = {"robot": "urdf", "sdf": "sdf", "mujoco": "mjcf"}
+"""Root element -> format: the file's content decides, not its extension (.xml is both)."""
+
+
+@dataclass(frozen=True, eq=False)
+class LinkReport:
+    """One link: status "computed" or "skipped"; ``reason`` why skipped; ``error`` True when the
+    skip means an input could not be processed (a missing or unreadable mesh), False for a link
+    that simply has nothing to compute (no geometry, a frame link)."""
+
+    link: Link
+    status: str
+    reason: str | None
+    error: bool
+    computed: LinkMass | None
+    comparison: Comparison | None
+    warnings: tuple[str, ...]
+
+    @property
+    def name(self) -> str:
+        return self.link.name
+
+    def stated_problems(self) -> tuple[str, ...]:
+        s = self.link.stated
+        return () if s is None else validity_problems(s.mass, s.inertia)
+
+    def as_dict(self, model: str) -> dict:
+        """The contract's JSON object for this link, plus "line" and "comparison"."""
+        s = self.link.stated
+        stated = None if s is None else {
+            "mass": s.mass, "center_of_mass": s.center_of_mass.tolist(),
+            "inertia": s.inertia.tolist(), "valid": not self.stated_problems()}
+        return {"model": model, "link": self.name, "line": self.link.node.line,
+                "status": self.status, "reason": self.reason, "stated": stated,
+                "computed": None if self.computed is None else self.computed.as_dict(),
+                "comparison": None if self.comparison is None else self.comparison.as_dict(),
+                "warnings": list(self.warnings)}
+
+
+@dataclass(frozen=True, eq=False)
+class ModelReport:
+    """Every link of one description, in file order (MJCF: MuJoCo's body order)."""
+
+    model: RobotModel
+    name: str
+    links: tuple[LinkReport, ...]
+
+    @property
+    def errors(self) -> list[str]:
+        """One line per link that could not be computed because of a bad input."""
+        return [f"{self.name}:{r.link.node.line}: link {r.name!r}: {r.reason}"
+                for r in self.links if r.error]
+
+    def failures(self, rtol: float) -> list[str]:
+        """Links whose stated inertial differs by more than ``rtol`` (see compare.py), or is not
+        physically valid; one short phrase each."""
+        out = []
+        for r in self.links:
+            problems = r.stated_problems()
+            if problems:
+                out.append(f"{r.name} ({problems[0]})")
+            elif r.comparison is not None and r.comparison.worst > rtol:
+                c = r.comparison
+                what = max((c.mass_rel, "mass"), (c.com_rel, "centre of mass"),
+                           (c.inertia_rel, "inertia"))
+                out.append(f"{r.name} ({what[1]} off by {what[0]:.3g})")
+        return out
+
+    def require_agreement(self, rtol: float) -> None:
+        """CheckFailedError (exit 4) naming the links that differ by more than ``rtol``."""
+        if not (math.isfinite(rtol) and rtol >= 0):
+            raise UsageError(f"--check needs a tolerance >= 0, got {rtol!r}")
+        bad = self.failures(rtol)
+        if bad:
+            raise CheckFailedError(
+                f"{self.name}: {len(bad)} link(s) differ from their geometry by more than "
+                f"{rtol:g}: {'; '.join(bad)}; fix the inertials (massprops model --write OUT)")
+
+    def write(self, out: str | os.PathLike, *, force: bool = False) -> int:
+        """Write the description with every computed link's inertial replaced or added;
+        returns how many were written. Atomic, never over the input."""
+        from massprops.robot.writeback import edited_bytes, write_description
+
+        edits = [(r.link.node, r.link.inertial_node, r.computed) for r in self.links
+                 if r.computed is not None]
+        data = edited_bytes(self.model.data, self.model.format, edits)
+        write_description(data, out, source=self.model.path, force=force)
+        return len(edits)
+
+
+def load_model(path: str | os.PathLike, *, source: str = "collision",
+               package_paths: Sequence[str | os.PathLike] = ()) -> RobotModel:
+    """Parse a URDF, SDF or MJCF file (told apart by its root element) into the neutral model."""
+    if source not in SOURCES:
+        raise UsageError(f"source must be one of {', '.join(SOURCES)}, got {source!r}")
+    p = Path(path)
+    root, data = parse_xml(p)
+    fmt = FORMATS_BY_ROOT.get(root.tag)
+    if fmt is None:
+        raise RobotModelError(f"{p}:{root.line}: <{root.tag}>: not a robot description; expected "
+                              "a root element <robot> (URDF), <sdf> (SDF) or <mujoco> (MJCF)")
+    if fmt == "urdf":
+        from massprops.robot.urdf import parse_urdf as parse
+    elif fmt == "sdf":
+        from massprops.robot.sdf import parse_sdf as parse
+    else:
+        from massprops.robot.mjcf import parse_mjcf as parse
+    return parse(root, data, p, source=source,
+                 package_paths=[Path(d) for d in package_paths])
+
+
+def analyze_model(path: str | os.PathLike, *, source: str = "collision",
+                  density: float | None = None,
+                  package_paths: Sequence[str | os.PathLike] = (),
+                  allow_open: bool = False) -> ModelReport:
+    """Every link of the description at ``path``: its geometry integrated, against its stated
+    inertial.
+
+    source : "collision" (default) or "visual" geometry (MJCF: see mjcf.py).
+    density : kg/m³ for every geometry; default: keep each link's stated mass (the density
+        follows from its geometry's volume); MJCF bodies without an inertial use their geoms'
+        own density/mass (MuJoCo's rule); URDF/SDF links without a stated mass are skipped.
+    Raises RobotModelError (malformed description), MeshFileError (unreadable file); a link
+    whose meshes cannot be used is reported as skipped with ``error`` set, not raised.
+    """
+    if density is not None and not (math.isfinite(density) and density > 0):
+        raise UsageError(f"density must be a positive finite number, got {density!r}")
+    model = load_model(path, source=source, package_paths=package_paths)
+    meshes = MeshCache(allow_open=allow_open)
+    reports = tuple(_link(link, model, meshes, density) for link in model.links)
+    return ModelReport(model, str(path), reports)
+
+
+def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | None) -> LinkReport:
+    warnings = list(link.warnings)
+
+    def skipped(reason: str, error: bool) -> LinkReport:
+        return LinkReport(link, "skipped", reason, error, None, None, tuple(warnings))
+
+    if not link.geometries:
+        return skipped("no geometry (a frame or dummy link)" if not link.stated else
+                       "no geometry to compute its inertial from", False)
+    for g in link.geometries:
+        if g.problem:
+            return skipped(g.problem, True)
+    warnings.extend(g.warning for g in link.geometries if g.warning)
+    parts = []
+    for g in link.geometries:
+        try:
+            part = integrate_geometry(g, meshes)
+        except MassPropsError as exc:
+            return skipped(f"{g.uri or g.kind} (line {g.node.line}): {exc}", True)
+        warnings.extend(f"{g.uri}: {w}" for w in part.warnings)
+        parts.append(part)
+    stated = link.stated
+    total = None
+    if density is not None:
+        masses = [density * p.volume for p in parts]
+    else:
+        weights = [g.mass if g.mass is not None else (g.density or 1.0) * p.volume
+                   for g, p in zip(link.geometries, parts)]
+        if stated is not None and stated.mass > 0:
+            masses = [stated.mass * w / sum(weights) for w in weights]
+            total = stated.mass
+        elif model.format == "mjcf":
+            masses = weights
+        else:
+            return skipped("no stated mass to keep and no --density: give --density RHO "
+                           "(kg/m³)", False)
+    computed = combine(parts, masses, total)
+    if stated is None:
+        if model.format != "mjcf":  # an MJCF body without one gets MuJoCo's sum over its geoms
+            warnings.append("no stated inertial: nothing to compare")
+        comparison = None
+    else:
+        comparison = compare(stated, computed)
+    if not np.isfinite(computed.inertia).all():
+        return skipped("the computed inertia is not finite", True)
+    return LinkReport(link, "computed", None, False, computed, comparison, tuple(warnings))

@@ -1,0 +1,109 @@
+"""Stated against computed: how far a description's inertial is from the geometry's, and whether
+the stated tensor is one a body can have.
+
+What "differs by more than RTOL" means (``Comparison.worst``, what ``model --check`` tests):
+- mass: |m_stated - m_computed| / m_computed;
+- centre of mass: |c_stated - c_computed| / size, size the diagonal of the box around the
+  link's geometry (a COM 1 cm off on a 1 m link is 1 %);
+- inertia: ||J_stated - J_computed||₂ / ||J_computed||₂, the spectral norm (the largest change
+  of the moment about any axis, relative to the largest principal moment): it sees wrong moments
+  and wrongly turned axes alike, and stays defined where principal axes are not (a cylinder).
+The angle between the principal frames is reported but not tested: it is meaningless where
+moments (nearly) coincide. A stated tensor that is not physically valid (not positive
+definite, or a moment larger than the sum of the other two) fails the check whatever RTOL.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from massprops.inertia import principal_axes
+from massprops.robot.combine import LinkMass
+from massprops.robot.model import StatedInertial
+from massprops.tolerances import DEGENERATE_MOMENT_RTOL, INERTIA_VALIDITY_RTOL
+
+__all__ = ["Comparison", "compare", "validity_problems"]
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """mass_rel, com_offset (m), com_rel (of size), inertia_rel: as the module says.
+    axes_angle : rad, the largest angle between matching principal axes whose computed moment
+    stands apart from the others, or None when all three coincide (a sphere, a cube).
+    problems : why the stated tensor is not physically valid ([] if it is)."""
+
+    mass_rel: float
+    com_offset: float
+    com_rel: float
+    inertia_rel: float
+    axes_angle: float | None
+    problems: tuple[str, ...]
+
+    @property
+    def worst(self) -> float:
+        return max(self.mass_rel, self.com_rel, self.inertia_rel)
+
+    def passes(self, rtol: float) -> bool:
+        return not self.problems and self.worst <= rtol
+
+    def as_dict(self) -> dict:
+        return {"mass_rel": self.mass_rel, "com_offset": self.com_offset,
+                "com_rel": self.com_rel, "inertia_rel": self.inertia_rel,
+                "axes_angle": self.axes_angle, "valid": not self.problems,
+                "problems": list(self.problems)}
+
+
+def validity_problems(mass: float, inertia: np.ndarray) -> tuple[str, ...]:
+    """Why (mass, inertia about the COM) cannot belong to a body; () when it can."""
+    out = []
+    if not (math.isfinite(mass) and mass > 0):
+        out.append(f"mass {mass!r} is not positive")
+    j = np.asarray(inertia, dtype=np.float64)
+    if not np.isfinite(j).all():
+        return (*out, "inertia has non-finite entries")
+    scale = float(np.max(np.abs(j))) or 1.0
+    if np.max(np.abs(j - j.T)) > INERTIA_VALIDITY_RTOL * scale:
+        out.append("inertia is not symmetric")
+    moments = np.linalg.eigvalsh(0.5 * (j + j.T))
+    tol = INERTIA_VALIDITY_RTOL * max(float(np.max(np.abs(moments))), 0.0)
+    if moments[0] <= tol:
+        out.append(f"inertia is not positive definite (smallest principal moment "
+                   f"{moments[0]:.6g} kg·m²)")
+    elif moments[2] > moments[0] + moments[1] + tol:
+        out.append(f"principal moments {moments[0]:.6g}, {moments[1]:.6g}, {moments[2]:.6g} "
+                   "break the triangle inequality (the largest exceeds the sum of the others)")
+    return tuple(out)
+
+
+def compare(stated: StatedInertial, computed: LinkMass) -> Comparison:
+    """Stated against computed, both about their own centres of mass in the link's axes."""
+    offset = float(np.linalg.norm(stated.center_of_mass - computed.center_of_mass))
+    norm = float(np.linalg.norm(computed.inertia, 2))
+    return Comparison(
+        mass_rel=abs(stated.mass - computed.mass) / computed.mass,
+        com_offset=offset,
+        com_rel=offset / computed.size,
+        inertia_rel=float(np.linalg.norm(stated.inertia - computed.inertia, 2)) / norm,
+        axes_angle=_axes_angle(stated.inertia, computed),
+        problems=validity_problems(stated.mass, stated.inertia),
+    )
+
+
+def _axes_angle(stated_inertia: np.ndarray, computed: LinkMass) -> float | None:
+    moments = computed.principal_moments
+    gap = DEGENERATE_MOMENT_RTOL * float(np.max(np.abs(moments)))
+    j = np.asarray(stated_inertia, dtype=np.float64)
+    if not np.isfinite(j).all():
+        return None
+    _, stated_axes = principal_axes(j)
+    angles = []
+    for i in range(3):
+        others = np.delete(moments, i)
+        if np.all(np.abs(others - moments[i]) > gap):
+            a, b = computed.principal_axes[:, i], stated_axes[:, i]
+            # atan2 of |a×b| and |a·b|: accurate for tiny angles, sign-blind (axes are lines)
+            angles.append(math.atan2(float(np.linalg.norm(np.cross(a, b))), abs(float(a @ b))))
+    return max(angles) if angles else None

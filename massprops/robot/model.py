@@ -1,0 +1,96 @@
+"""The neutral model every parser produces: links, their stated inertials and their geometry.
+
+Frames: every vector and tensor here is in the *link frame* (URDF/SDF link, MJCF body), SI units.
+A geometry's pose maps its own frame into the link frame: v_link = rotation @ v_geom + translation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from massprops.robot.xmltree import Node
+
+__all__ = ["Geometry", "Link", "RobotModel", "StatedInertial"]
+
+
+@dataclass(frozen=True, eq=False)
+class StatedInertial:
+    """What the file says about a link's mass distribution.
+
+    mass : kg. center_of_mass : (3,) m, link frame. inertia : (3, 3) kg·m² about the centre of
+    mass in the link's axes (the file's inertial frame already rotated in: J = A J' Aᵀ).
+    node : the element it came from (for the line number and for write-back).
+    """
+
+    mass: float
+    center_of_mass: np.ndarray
+    inertia: np.ndarray
+    node: Node
+
+
+@dataclass(frozen=True, eq=False)
+class Geometry:
+    """One solid that makes up a link.
+
+    kind : "mesh" or a key of ``primitives.PRIMITIVES``.
+    dims : the primitive's dimensions (``primitives.Solid.dims``), () for a mesh.
+    rotation : (3, 3), translation : (3,) m: the geometry frame in the link frame.
+    path : the mesh file, resolved; None for primitives, or when it could not be resolved.
+    uri : the mesh reference as written (for messages).
+    scale : (3,) per-axis scale applied to the mesh's coordinates before the pose.
+    density : kg/m³ the file gives this geometry (MJCF geom density), or None (URDF/SDF: the
+        link is uniform). mass : kg the file gives this geometry (MJCF geom mass), or None.
+    problem : why this geometry cannot be integrated (an unresolved URI, an unsupported kind), or
+        None. A link with a problem is skipped and counted as an input error.
+    vertices, faces : an inline mesh (MJCF ``<mesh vertex= face=>``), else None.
+    warning : a remark about how a simulator treats it (not an error), or None.
+    node : the element it came from (line numbers).
+    """
+
+    kind: str
+    node: Node
+    rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    translation: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    dims: tuple[float, ...] = ()
+    path: Path | None = None
+    uri: str = ""
+    scale: np.ndarray = field(default_factory=lambda: np.ones(3))
+    density: float | None = None
+    mass: float | None = None
+    problem: str | None = None
+    vertices: np.ndarray | None = None
+    faces: np.ndarray | None = None
+    warning: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Link:
+    """A URDF/SDF link or an MJCF body.
+
+    name : as in the file (MJCF bodies without a name: ``body#k``, k MuJoCo's body id).
+    node : its element. stated : its inertial, or None. geometries : what it is made of (the
+    collision or visual set, as asked). warnings : remarks about the description (not errors).
+    inertial_node : the element to replace on write-back (None: insert a new one).
+    """
+
+    name: str
+    node: Node
+    stated: StatedInertial | None
+    geometries: tuple[Geometry, ...]
+    inertial_node: Node | None = None
+    warnings: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class RobotModel:
+    """A parsed description: ``format`` is "urdf", "sdf" or "mjcf"; ``data`` the file's bytes
+    (write-back edits them); ``warnings`` concern the whole model."""
+
+    path: Path
+    format: str
+    links: tuple[Link, ...]
+    data: bytes
+    warnings: tuple[str, ...] = ()
