@@ -11,6 +11,8 @@ import io
 import math
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -387,3 +389,20 @@ def test_a_large_file_goes_out_first_and_its_record_still_in_place(tmp_path):
                                     chunk_s=5 * plan.estimate(small[0])))  # 5 small per task
     assert executor.order[0] == len(small)  # the large file was handed out first ...
     assert [outcome(r) for r in records] == [reference(p) for p in paths]  # ... printed last
+
+
+@pytest.mark.timeout(120)
+def test_a_pool_whose_workers_cannot_start_falls_back_to_this_process(tmp_path):
+    """A program read from stdin has no file the fork server's children can import as their
+    __main__ (multiprocessing's rule): every worker dies at start. The batch must still end,
+    with every record, computed here."""
+    mesh = torus_obj(tmp_path / "t.obj", 12, 8)
+    script = (
+        "from massprops.batch import inspect_many, plan\n"
+        "plan.POOL_MIN_S = 0.0\n"
+        f"records = list(inspect_many([{str(mesh)!r}] * 60, jobs=2, chunk_s=0.0))\n"
+        "print(len(records), sum(r.error is None for r in records))\n")
+    res = subprocess.run([sys.executable, "-"], input=script, capture_output=True, text=True,
+                         cwd=tmp_path, timeout=100)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert res.stdout.split() == ["60", "60"]

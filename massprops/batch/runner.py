@@ -13,7 +13,8 @@ so that every input is still reported exactly once. A task whose future failed (
 killed, e.g. out of memory, breaks the whole pool; Dask gives up on a task after its workers
 died a few times) is split into one task per file; a single file that fails again is re-run
 alone, with nothing else in flight, so that a crash is only blamed on the file that caused it;
-if it fails alone too, its record says so (exit 3). A broken local pool is replaced.
+if it fails alone too, its record says so (exit 3). A broken local pool is replaced, unless it
+never finished a task (its workers cannot start here): then the batch goes on in this process.
 
 Ctrl-C: `Batch.interrupt` cancels what has not finished, stops the local workers (and waits
 for them: no orphans) and returns the records that were finished but not yet handed out, in
@@ -127,12 +128,15 @@ class Batch(Iterator[MeshResult]):
         self._options = dict(options)
         self._cwd = os.getcwd()
         self._slots: deque[_Slot] = deque()
+        self._queued_cost = 0.0  # estimated seconds of the chunks in _slots
         self._ready: deque[MeshResult] = deque()
         self._chunks: Iterator[plan.Chunk] | None = None
         self._lookahead: deque[plan.Chunk] = deque()
         self._local: Iterator[MeshResult] | None = None
         self._exhausted = False
         self._alone = False
+        self._inline = False  # tasks run here: a local pool whose workers could not start
+        self._pool_worked = False  # the current local pool has finished a task
         self._seen = 0
         self._closed = False
         self.total: int | None = len(paths) if isinstance(paths, Sized) else None
@@ -167,7 +171,7 @@ class Batch(Iterator[MeshResult]):
             head = self._slots[0]
             results = self._settle(head)
             if results is not None:
-                self._slots.popleft()
+                self._queued_cost -= self._slots.popleft().chunk.cost
                 self._ready.extend(results)
         return self._ready.popleft()
 
@@ -227,6 +231,7 @@ class Batch(Iterator[MeshResult]):
 
         self._executor = local_pool(self._workers)
         self._own_pool = True
+        self._pool_worked = False
 
     # --- the window ----------------------------------------------------------------------------
     def _room(self) -> bool:
@@ -238,7 +243,7 @@ class Batch(Iterator[MeshResult]):
         head = self._slots[0]
         # a head running longer than estimated (the model is rough) earns a longer window
         running = time.monotonic() - head.started if head.started is not None else 0.0
-        queued = sum(s.chunk.cost for s in self._slots) - head.chunk.cost
+        queued = self._queued_cost - head.chunk.cost
         return queued < self._workers * max(WINDOW_S, head.chunk.cost, 2 * running)
 
     def _fill(self) -> None:
@@ -248,6 +253,7 @@ class Batch(Iterator[MeshResult]):
                 self._exhausted = True
                 break
             self._slots.append(_Slot(chunk, self._index_of_next()))
+            self._queued_cost += chunk.cost
         self._top_up()
 
     def _index_of_next(self) -> int:
@@ -280,6 +286,11 @@ class Batch(Iterator[MeshResult]):
         from massprops.batch.worker import run_chunk
 
         args = (self._cwd, slot.chunk.inputs, self._options, self._own_pool, slot.index)
+        if self._inline:
+            slot.future = Future()
+            slot.future.set_result([self._here(item) for item in slot.chunk.inputs])
+            slot.pool, slot.started = None, time.monotonic()
+            return
         try:
             slot.future = self._executor.submit(run_chunk, *args)
         except BrokenExecutor:
@@ -307,6 +318,7 @@ class Batch(Iterator[MeshResult]):
         error = _failure(slot.future)
         if error is None:
             self._end_alone(slot)
+            self._pool_worked |= self._own_pool and slot.pool is self._executor
             return slot.future.result()
         if self._own_pool and slot.pool is self._executor and _broken(error):
             self._replace_pool(keep=slot)
@@ -326,9 +338,11 @@ class Batch(Iterator[MeshResult]):
         position = self._slots.index(slot)
         if len(slot.chunk.inputs) > 1:  # each file waits for its turn (see _top_up)
             self._slots.remove(slot)
+            self._queued_cost -= slot.chunk.cost
             for k, path in enumerate(slot.chunk.inputs):
                 single = _Slot(plan.Chunk([path], plan.estimate(path)), slot.index + k)
                 self._slots.insert(position + k, single)
+                self._queued_cost += single.chunk.cost
             return
         if not slot.alone:
             slot.alone, slot.future = True, None
@@ -359,7 +373,12 @@ class Batch(Iterator[MeshResult]):
 
         old = self._executor
         stop_pool(old)  # also waits until the old pool has failed or cancelled all its tasks
-        self._new_pool()
+        self._pool_worked |= any(s.pool is old and s.future is not None and s.future.done()
+                                 and _failure(s.future) is None for s in self._slots)
+        if self._pool_worked:
+            self._new_pool()
+        else:  # it never finished a task: its workers cannot start here; go on in this process
+            self._executor, self._own_pool, self._inline = None, False, True
         for slot in self._slots:  # back to waiting: _top_up hands them out again
             if slot is not keep and slot.pool is old and slot.future is not None \
                     and _failure(slot.future) is not None:
