@@ -27,3 +27,11 @@ MIN_VOLUME_TO_ERROR = 100.0
 nothing we can resolve (flat, or inside-out halves cancelling) and is refused as degenerate,
 rather than reported as 0, a random sign or NaN. A bound-based test, unlike a fraction of the
 bounding box, accepts a needle of aspect 1e-6 lying along the box diagonal."""
+
+JOINT_RTOL = 1e-9
+"""How far a scene's joint geometry and initial state may miss the joints and still count as
+consistent: positions relative to the body size, angles in rad, velocities relative to their
+scale. Scene files carry ~10-17 digits, so a state typed from a closed form (sqrt(3)/2 written
+with 10 digits) passes, while any real mistake (a sign, a swapped axis, a metre off) fails with
+a message giving the consistent value. What passes is projected silently: the run always starts
+exactly on the joints."""
