@@ -19,9 +19,9 @@ from massprops.dynamics.accuracy import (
 )
 from massprops.dynamics.forces import (
     DRAG,
-    GRAVITY,
     FORCE_BODY,
     FORCE_WORLD,
+    GRAVITY,
     SPRING,
     TORQUE_BODY,
     TORQUE_WORLD,

@@ -65,7 +65,7 @@ def _point(joint: Joint, body: RigidBody) -> np.ndarray:
 
 
 def _fmt(v) -> str:
-    return "[" + ", ".join(f"{float(x):.10g}" for x in np.atleast_1d(v)) + "]"
+    return "[" + ", ".join(f"{float(x) + 0.0:.10g}" for x in np.atleast_1d(v)) + "]"
 
 
 def hold_of(joints: tuple[Joint, ...], body: RigidBody) -> Hold:

@@ -138,7 +138,7 @@ def bind_scene(scene: Scene, *, project: bool = False, given: frozenset[str] | N
         moved = ", ".join(f"{d.key.replace('_', ' ')} by {d.amount:.3g} {d.unit}"
                           for d in deviations)
         where = initial_field.where() if initial_field is not None else f"{scene.source}: "
-        notes = (*notes, f"{where}initial state projected onto the joints: {moved}")
+        notes = (*notes, f"{where}projected onto the joints: {moved}")
     joints = tuple(dataclasses.replace(j, world_axis=hold.world_axis)
                    if isinstance(j, RevoluteJoint) else j for j in scene.joints)
     return dataclasses.replace(scene, initial=initial, joints=joints, notes=notes)
