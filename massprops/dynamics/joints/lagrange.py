@@ -295,8 +295,12 @@ def _roots(beta, c2, c1, c0, pole_coefficients, omu0, opu0, through_top, through
             break
         x -= step
     x3 = x
-    pq = c2 / beta + x3
+    # β (x - x3)(x² + p x + r): r = x1 x2 = -c0/(β x3), and p = -(x1 + x2) from Vieta's
+    # x1 x2 + x3 (x1 + x2) = c1/β rather than from x1 + x2 + x3 = -c2/β, which cancels when
+    # the far root is large (a fast top: u3 ~ a²/β >> 1) and would leave the centre of the
+    # nutation, hence the precession rate, wrong by ~eps·u3
     r = -c0 / (beta * x3) if x3 > 0.0 else c1 / beta
+    pq = (r - c1 / beta) / x3 if x3 >= 1.0 else c2 / beta + x3
     sq = math.sqrt(max(pq * pq - 4.0 * r, 0.0))
     if pq >= 0.0:
         xa = -0.5 * (pq + sq)
