@@ -399,3 +399,47 @@ def test_trajectory_files_carry_the_reaction_columns(tmp_path):
     write_trajectory(res.trajectory, tmp_path / "t.npz")
     with np.load(tmp_path / "t.npz") as npz:
         assert np.array_equal(npz["joint0_torque_world"], res.trajectory.joints[0].torque_world)
+
+
+@pytest.mark.parametrize(("case", "angle", "w_body"), [
+    ("released upright with a push: through the top", 0.0, [0.7, 0.2, 20.0]),
+    ("a spherical pendulum in a plane: through the bottom", 2.5, [0.0, 0.0, 0.0]),
+    ("hanging straight down, pushed sideways", math.pi, [1.0, 0.0, 0.0]),
+    ("tilted 1e-3 rad: passes 2e-5 rad from the top", 1e-3, [0.3, 0.0, 20.0]),
+    ("steady precession at 60°", None, None),
+], ids=["top", "plane", "bottom", "near-top", "steady"])
+def test_the_closed_form_through_and_near_the_poles(case, angle, w_body):
+    """The branches of the half-angle form (a pole passed exactly, a turning point a hair from
+    one, a double root) against Euler's equations about the pivot in scipy."""
+    axis = R_TILT[:, 2]  # the body's symmetry axis (body coordinates)
+    if angle is None:  # A Ω² cos θ - C ω3 Ω + m g l = 0, the slow root
+        theta, spin = 1.0, 60.0
+        j_p = parallel_axis(J_TOP, M_TOP, TIP)
+        a_mom = float(R_TILT[:, 0] @ j_p @ R_TILT[:, 0])
+        c_mom = float(axis @ j_p @ axis)
+        mgl = M_TOP * G * L_TOP
+        omega = (c_mom * spin - math.sqrt((c_mom * spin) ** 2 - 4 * a_mom * math.cos(theta)
+                                          * mgl)) / (2 * a_mom * math.cos(theta))
+    else:
+        theta = angle
+    # the axis turned theta from the vertical about world x, body x-y free
+    upright = _quats(np.column_stack([R_TILT[:, 0], R_TILT[:, 1], axis]).T)  # axis -> z
+    q0 = quat_multiply_np(quat_from_axis_angle([1.0, 0.0, 0.0], theta), upright)
+    a0 = quat_to_matrix(q0)
+    if angle is None:
+        w_world = (spin - omega * math.cos(theta)) * (a0 @ axis) + omega * np.array([0, 0, 1.0])
+        w0 = a0.T @ w_world
+    else:
+        w0 = R_TILT @ np.asarray(w_body)  # given in the axis' own frame
+    res = simulate(parse(top(q0, w0, 2.0, integrator="exact", every=0.02)))
+    tr = res.trajectory
+    a_ref, w_ref = euler_about_pivot(a0, w0, tr.t)
+    assert np.max(orientation_error(a_ref, tr.orientation)) < 5e-11, case
+    assert np.max(np.abs(tr.angular_velocity_body - w_ref)) < 5e-11 * max(
+        1.0, float(np.linalg.norm(w0))), case
+
+
+def quat_multiply_np(p, q):
+    from massprops.rotation import quat_multiply
+
+    return quat_multiply(p, q)

@@ -247,3 +247,43 @@ def json_final(result) -> dict:
     import json
 
     return json.loads(result.stdout)["final"]
+
+
+def test_simulate_json_plot_and_trajectory_of_a_hinge(run, tmp_path):
+    pytest.importorskip("matplotlib")
+    path = tmp_path / "scene.yaml"
+    path.write_text(BODY + "joints: [{type: revolute, point: [0, 0, 0.5], axis: [1, 0, 0], "
+                    "anchor: [0, 0, 0]}]\ninitial: {angular_velocity: [2.0, 0, 0]}\n"
+                    "forces: [{type: gravity, g: [0, 0, -9.81]}]\n" + TIME)
+    result = run("simulate", path, "--json", "--plot", tmp_path / "p.png", "--output",
+                 tmp_path / "t.csv", "--every", "0.1")
+    assert result.exit_code == 0, result.stderr
+    import json
+
+    out = json.loads(result.stdout)
+    (joint,) = out["final"]["joints"]
+    assert joint["type"] == "revolute" and len(joint["torque_world"]) == 3
+    assert out["diagnostics"]["constraint_drift"] < 1e-14
+    assert (tmp_path / "p.png").stat().st_size > 0
+    header = (tmp_path / "t.csv").read_text().splitlines()[0]
+    assert "j0_fz [N]" in header and "j0_tz_body [N*m]" in header
+
+
+def test_a_free_body_reports_no_joints_and_a_null_constraint_drift(run, tmp_path):
+    path = tmp_path / "scene.yaml"
+    path.write_text(BODY + "initial: {angular_velocity: [0.1, 2.0, 0]}\n" + TIME)
+    result = run("simulate", path, "--json")
+    import json
+
+    out = json.loads(result.stdout)
+    assert out["final"]["joints"] == [] and out["diagnostics"]["constraint_drift"] is None
+
+
+def test_exact_is_refused_for_a_held_body_without_a_closed_form(run, tmp_path):
+    path = tmp_path / "scene.yaml"
+    path.write_text(BODY + "joints: [{type: revolute, point: [0, 0, 0.5], axis: [1, 0, 0], "
+                    "anchor: [0, 0, 0]}]\nforces: [{type: gravity, g: [0, 0, -9.81]}]\n" + TIME)
+    result = run("simulate", path, "--integrator", "exact")
+    assert result.exit_code == 2
+    (line,) = result.stderr.splitlines()
+    assert "heavy symmetric top" in line
