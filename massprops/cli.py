@@ -592,6 +592,8 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         scene = load_scene(scene_path)
         for w in scene.warnings:
             _say_warning(scene.body_source, w)
+        for note in scene.notes:  # already placed: "scene.yaml:LINE: ..."
+            click.echo(f"massprops: warning: {note}", err=True)
         out = output_path or scene.output.file
         sampling = every or scene.output.every
         if sampling is None and (out or plot_path):

@@ -158,7 +158,14 @@ def print_simulation(scene, result) -> None:
                       ("angular_velocity_body", "rad/s, body")):
         _row(head, f"{key.replace('_', ' ')} [{unit}]",
                      "(" + ", ".join(f"{x:.10g}" for x in final[key]) + ")")
-    why_none = {"error_estimate": "n/a (run interrupted, or its companion run diverged)"}
+    for k, joint in enumerate(final.get("joints", ())):
+        _row(head, f"joint {k} ({joint['type']}) force on body [N, world]",
+             "(" + ", ".join(f"{x:.6g}" for x in joint["force_world"]) + ")")
+        if joint["torque_world"] is not None:
+            _row(head, f"joint {k} torque on body [N·m, world]",
+                 "(" + ", ".join(f"{x:.6g}" for x in joint["torque_world"]) + ")")
+    why_none = {"error_estimate": "n/a (run interrupted, or its companion run diverged)",
+                "constraint_drift": "n/a (no joints)"}
     for key, value in result.diagnostics.items():
         _row(head, key.replace("_", " "), f"{value:.3g}" if value is not None
              else why_none.get(key, "n/a (not conserved in this scene)"))

@@ -46,6 +46,7 @@ this fraction of the largest moment. Writers print floats in repr, so a tensor m
 comes back exact; 1e-12 leaves room for a tensor that was rounded to ~12 digits by another tool
 (a thin rod or disc sits exactly on the triangle inequality's edge) while a placeholder that
 breaks it does so by percent."""
+
 MAX_HOLE_AREA_FRACTION = 0.1
 """``--fill-holes`` caps a boundary loop only if its cap is at most this fraction of the surface
 area (``--max-hole`` overrides). Holes from scanning and export are small (well under 1 % of the
@@ -69,3 +70,11 @@ RIM_NORMAL_RTOL = 1e-9
 Σ|p - c|² has no reliable normal (a figure of eight, a rim folded onto itself); its best-fit
 plane is then the direction of least spread. Round-off in the vector area is ~1e-16 of that
 spread, seven orders below; a real rim that flat is a sliver with no sensible cap plane anyway."""
+
+JOINT_RTOL = 1e-9
+"""How far a scene's joint geometry and initial state may miss the joints and still count as
+consistent: positions relative to the body size, angles in rad, velocities relative to their
+scale. Scene files carry ~10-17 digits, so a state typed from a closed form (sqrt(3)/2 written
+with 10 digits) passes, while any real mistake (a sign, a swapped axis, a metre off) fails with
+a message giving the consistent value. What passes is projected silently: the run always starts
+exactly on the joints."""

@@ -22,7 +22,7 @@ from numba import njit
 
 from massprops.dynamics.model import Drag, Gravity, PointForce, RigidBody, Scene, Spring, Torque
 
-GRAVITY, FORCE_WORLD, FORCE_BODY, TORQUE_WORLD, TORQUE_BODY, SPRING, DRAG = range(7)
+GRAVITY, FORCE_WORLD, FORCE_BODY, TORQUE_WORLD, TORQUE_BODY, SPRING, DRAG, JOINT = range(8)
 NPAR = 10
 """Parameters per term (row of `ForceProgram.params`):
 GRAVITY      [0:3] m·g (N, world)
@@ -33,6 +33,8 @@ TORQUE_BODY  [0:3] τ' (N·m, principal)
 SPRING       [0:3] anchor (m, world) [3:6] s' [6] 1 if s' != 0 [7] k (N/m) [8] rest length (m)
              [9] damping c (N·s/m)
 DRAG         [0] linear (N·s/m)  [1] angular (N·m·s)
+JOINT        [0] 1 if the torque across the principal z axis is taken out (a hinge) [1] 1 if
+             the program is a heavy symmetric top that `exact` solves (massprops.dynamics.joints)
 """
 
 
@@ -47,6 +49,8 @@ class ForceProgram:
         the COM moves in closed form, piecewise between window edges
     stiffest_rate : 1/s, the largest rate among spring/damper/drag terms (0 if none): the
         explicit-step limit is about 2.8 / stiffest_rate for RK4
+    joints : for a body held by joints, the `massprops.dynamics.joints.reduction.JointModel`
+        whose equivalent pinned body this program describes (None: a free body)
     """
 
     codes: np.ndarray
@@ -57,6 +61,15 @@ class ForceProgram:
     has_torque: bool
     translation_closed_form: bool
     stiffest_rate: float
+    joints: object | None = None
+
+    @property
+    def exact_solvable(self) -> bool:
+        """`exact` applies: torque-free with constant forces, or a held body whose motion the
+        joints package has in closed form (the heavy symmetric top)."""
+        if self.joints is not None and self.joints.closed_form:
+            return True
+        return not self.has_torque and self.translation_closed_form
 
     def active(self, t_mid: float) -> np.ndarray:
         """(k,) bool: which terms act on a segment containing ``t_mid`` (between window edges)."""
@@ -68,7 +81,10 @@ class ForceProgram:
         return np.unique(edges[(edges > t0) & (edges < t1)])
 
     def constant_force(self, active: np.ndarray) -> np.ndarray:
-        """(3,) N, world: the total force while ``active`` (valid if translation_closed_form)."""
+        """(3,) N, world: the total force while ``active`` (valid if translation_closed_form).
+        Zero for a held body: its joint's reaction keeps the held point in place."""
+        if self.joints is not None:
+            return np.zeros(3)
         rows = active & ((self.codes == GRAVITY) | (self.codes == FORCE_WORLD))
         return self.params[rows, 0:3].sum(axis=0)
 
@@ -81,7 +97,12 @@ def _arm(body: RigidBody, point: np.ndarray | None) -> np.ndarray:
 
 
 def compile_forces(scene: Scene) -> ForceProgram:
-    """Turn the scene's force terms into a `ForceProgram` (one row per term, in scene order)."""
+    """Turn the scene's force terms into a `ForceProgram` (one row per term, in scene order).
+    A body held by joints gets the program of its equivalent pinned body (dynamics.joints)."""
+    if scene.joints:
+        from massprops.dynamics.joints.reduction import compile_held
+
+        return compile_held(scene)
     body = scene.body
     to_principal = body.principal_axes.T  # body -> principal
     i_min = float(body.principal_moments[0])
@@ -164,6 +185,11 @@ def force_torque(y, o, active, codes, params):
             fx += p[0]
             fy += p[1]
             fz += p[2]
+            continue
+        if c == JOINT:  # always the last row: the reaction cancels what the joint carries
+            fx = fy = fz = 0.0
+            if p[0] != 0.0:
+                nx = ny = 0.0
             continue
         if c == DRAG:
             if o == 6:

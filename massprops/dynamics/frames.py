@@ -22,7 +22,9 @@ class Trajectory:
     """Sampled motion, SI, world frame unless named: t (n,) s; position (n, 3) COM; orientation
     (n, 4) body->world [w, x, y, z]; velocity (n, 3); angular_velocity (n, 3) world;
     angular_velocity_body (n, 3) body frame; angular_momentum (n, 3) world, about the COM,
-    kg·m²/s; energy (n,) J or None where the scene makes it meaningless (external work)."""
+    kg·m²/s; energy (n,) J or None where the scene makes it meaningless (external work);
+    joints: the reaction of each joint (massprops.dynamics.joints.edges.JointLoads), scene
+    order (empty for a free body)."""
 
     t: np.ndarray
     position: np.ndarray
@@ -32,16 +34,23 @@ class Trajectory:
     angular_velocity_body: np.ndarray
     angular_momentum: np.ndarray
     energy: np.ndarray | None = None
+    joints: tuple = ()
 
     def row(self, i: int) -> dict:
         return {"t": float(self.t[i]), "position": self.position[i].tolist(),
                 "orientation": self.orientation[i].tolist(), "velocity": self.velocity[i].tolist(),
                 "angular_velocity": self.angular_velocity[i].tolist(),
-                "angular_velocity_body": self.angular_velocity_body[i].tolist()}
+                "angular_velocity_body": self.angular_velocity_body[i].tolist(),
+                "joints": [joint.row(i) for joint in self.joints]}
 
 
 def initial_principal_state(scene: Scene) -> np.ndarray:
-    """(13,) [r, v, q_p, omega'] at t = 0 from the scene's world/body initial values."""
+    """(13,) [r, v, q_p, omega'] at t = 0 from the scene's world/body initial values (a body
+    held by joints: of its equivalent pinned body, massprops.dynamics.joints)."""
+    if scene.joints:
+        from massprops.dynamics.joints.reduction import model_of
+
+        return model_of(scene).y0.copy()
     body, ini = scene.body, scene.initial
     q_r = matrix_to_quat(body.principal_axes)  # principal -> body
     q_p = canonical(quat_multiply(ini.orientation, q_r))
@@ -54,7 +63,10 @@ def initial_principal_state(scene: Scene) -> np.ndarray:
 
 def to_world(scene: Scene, t: np.ndarray, y: np.ndarray, program: ForceProgram,
              with_energy: bool) -> Trajectory:
-    """Principal-frame states (n, 13) -> a Trajectory in the contract's frames."""
+    """Principal-frame states (n, 13) -> a Trajectory in the contract's frames (a program of
+    a held body takes its pinned body's states: massprops.dynamics.joints)."""
+    if program.joints is not None:
+        return program.joints.to_world(t, y, with_energy)
     r_axes = scene.body.principal_axes
     q_p = y[:, 6:10] / np.linalg.norm(y[:, 6:10], axis=1, keepdims=True)
     q_body = canonical(quat_multiply(q_p, matrix_to_quat(r_axes.T)))

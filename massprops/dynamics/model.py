@@ -14,10 +14,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from massprops.errors import UnphysicalInertiaError
+
+if TYPE_CHECKING:
+    from massprops.dynamics.joints.model import Joint
 
 INF = math.inf
 
@@ -182,7 +186,9 @@ class Scene:
     """A whole scene, validated. ``source`` names the file for messages; ``body_source`` says
     where the mass properties came from (mesh path or "explicit"); ``input_files`` are the files
     the scene reads (its mesh), which no output may replace; ``warnings`` what the mesh's health
-    check said (a flipped or open mesh)."""
+    check said (a flipped or open mesh); ``joints`` what holds the body to the world
+    (massprops.dynamics.joints; empty: a free body); ``notes`` what the scene's own checks said
+    (an initial state projected onto the joints)."""
 
     body: RigidBody
     initial: InitialState
@@ -193,3 +199,5 @@ class Scene:
     body_source: str = "explicit"
     input_files: tuple[Path, ...] = ()
     warnings: tuple[str, ...] = ()
+    joints: tuple[Joint, ...] = ()
+    notes: tuple[str, ...] = ()

@@ -38,11 +38,16 @@ def save_figure(fig, path: str | Path, *, force: bool = False, protect=()) -> No
 
 
 def plot_simulation(result, path: str | Path, *, force: bool = False, protect=()) -> None:
-    """Three stacked panels against time: angular velocity in the body frame, relative energy
-    drift (if the scene conserves or only loses energy), relative angular-momentum drift."""
+    """Stacked panels against time: angular velocity in the body frame, relative energy drift
+    (if the scene conserves or only loses energy), relative angular-momentum drift, and for a
+    body held by joints the reaction each joint applies to it (world frame)."""
     plt = _pyplot()
     tr = result.trajectory
-    fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True, constrained_layout=True)
+    joints = getattr(tr, "joints", ())
+    rows = 3 + (1 if joints else 0) + (1 if any(j.torque_world is not None for j in joints)
+                                       else 0)
+    fig, axes = plt.subplots(rows, 1, figsize=(8, 2.8 * rows + 0.1), sharex=True,
+                             constrained_layout=True)
     for k, label in enumerate("xyz"):
         axes[0].plot(tr.t, tr.angular_velocity_body[:, k], label=f"ω_{label}")
     axes[0].set_ylabel("angular velocity,\nbody frame [rad/s]")
@@ -51,20 +56,43 @@ def plot_simulation(result, path: str | Path, *, force: bool = False, protect=()
     _drift(axes[1], tr.t, None if tr.energy is None else tr.energy - tr.energy[0],
            abs(tr.energy[0]) if tr.energy is not None else 1.0, "energy drift\n|E - E₀| / |E₀|")
     h = tr.angular_momentum
-    _drift(axes[2], tr.t, np.linalg.norm(h - h[0], axis=1), np.linalg.norm(h[0]),
-           "angular momentum drift\n|H - H₀| / |H₀| (world)")
-    axes[2].set_xlabel("time [s]")
+    _drift(axes[2], tr.t, None if joints else np.linalg.norm(h - h[0], axis=1),
+           np.linalg.norm(h[0]), "angular momentum drift\n|H - H₀| / |H₀| (world)",
+           "not conserved about the centre of mass: the joints' reaction has a moment about "
+           "it\n(the diagnostics give the momenta about the joint this scene conserves)")
+    if joints:
+        _reactions(axes[3:], tr.t, joints)
+    axes[-1].set_xlabel("time [s]")
     try:
         save_figure(fig, path, force=force, protect=protect)
     finally:
         plt.close(fig)
 
 
-def _drift(ax, t, delta, scale, label) -> None:
+def _reactions(axes, t, joints) -> None:
+    """The joints' reaction forces (and hinge torques) on the body, world components."""
+    styles = ("-", "--", ":", "-.")
+    for k, joint in enumerate(joints):
+        for c, label in enumerate("xyz"):
+            axes[0].plot(t, joint.force_world[:, c], styles[k % 4], color=f"C{c}",
+                         label=f"joint {k}: F_{label}")
+            if joint.torque_world is not None:
+                axes[1].plot(t, joint.torque_world[:, c], styles[k % 4], color=f"C{c}",
+                             label=f"joint {k}: τ_{label}")
+    axes[0].set_ylabel("joint reaction force\non the body, world [N]")
+    axes[0].legend(loc="upper right", ncol=3, fontsize="small")
+    if len(axes) > 1:
+        axes[1].set_ylabel("hinge reaction torque\n(across its axis), world [N·m]")
+        axes[1].legend(loc="upper right", ncol=3, fontsize="small")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+
+
+def _drift(ax, t, delta, scale, label,
+           why: str = "not conserved in this scene (external work)") -> None:
     ax.set_ylabel(label)
     if delta is None:
-        ax.text(0.5, 0.5, "not conserved in this scene (external work)", ha="center",
-                va="center", transform=ax.transAxes)
+        ax.text(0.5, 0.5, why, ha="center", va="center", transform=ax.transAxes)
         return
     rel = np.abs(delta) / (scale if scale > 0 else 1.0)
     floor = np.finfo(float).eps / 4  # plot exact zeros at a visible floor on the log axis

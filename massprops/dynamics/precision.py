@@ -81,8 +81,9 @@ class PrecisionReport:
 
 
 def applicable(scene: Scene, program: ForceProgram, registry: Mapping) -> list[str]:
-    """Integrators that can run this scene (exact only for torque-free, constant-force scenes)."""
-    closed = not program.has_torque and program.translation_closed_form
+    """Integrators that can run this scene (exact only where a closed form exists:
+    ForceProgram.exact_solvable)."""
+    closed = program.exact_solvable
     return [name for name, spec in registry.items() if spec.kind != "exact" or closed]
 
 

@@ -1,7 +1,8 @@
 """Validate a scene YAML file, all of it, into the value objects of ``dynamics.model``.
 
 The scene rules live here: the keys each section takes, the body (a mesh or explicit mass and
-inertia), the initial state, the forces (the ``FORCE_TYPES`` registry), time and output. Reading
+inertia), the initial state, the forces (the ``FORCE_TYPES`` registry), time and output; the
+joints' own rules live in massprops.dynamics.joints.scene, called from here. Reading
 YAML nodes is ``dynamics.yamlnodes``' job, so each error names the file, the line and the key path
 in one line: ``scene.yaml:12: forces[2].stiffness: expected a non-negative number, got -3``.
 Everything is checked before anything runs; the one expensive step, integrating a mesh body, comes
@@ -18,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from massprops.dynamics.joints.scene import bind_scene, parse_joints, read_project
 from massprops.dynamics.model import (
     INF,
     Drag,
@@ -196,9 +198,12 @@ def _quaternion(field: Field) -> np.ndarray:
     return readonly_array((q / norm).tolist())
 
 
+_INITIAL_KEYS = ("position", "orientation", "velocity", "angular_velocity",
+                 "angular_velocity_frame", "project_initial")
+
+
 def _initial(field: Field | None) -> InitialState:
-    fields = read_optional_mapping(field, ("position", "orientation", "velocity",
-                                           "angular_velocity", "angular_velocity_frame"))
+    fields = read_optional_mapping(field, _INITIAL_KEYS)
     values: dict[str, object] = {k: read_vector(fields[k]) for k in
                                  ("position", "velocity", "angular_velocity") if k in fields}
     if "orientation" in fields:
@@ -206,6 +211,7 @@ def _initial(field: Field | None) -> InitialState:
     if "angular_velocity_frame" in fields:
         frame = read_choice(fields["angular_velocity_frame"], FRAMES, "frame")
         values["angular_velocity_frame"] = frame
+    read_project(fields)  # checked here too: a scene without joints still gets a typo refused
     return InitialState(**values)
 
 
@@ -328,7 +334,7 @@ def _output(field: Field | None, base_dir: Path) -> OutputSettings:
 
 
 # --- the document ---------------------------------------------------------------------------------
-_TOP_KEYS = ("body", "initial", "forces", "time", "output")
+_TOP_KEYS = ("body", "initial", "forces", "joints", "time", "output")
 
 
 def parse_scene(text: str, *, source: str, base_dir: Path,
@@ -355,6 +361,7 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
     body = _body_spec(fields["body"], base_dir)
     initial = _initial(fields.get("initial"))
     forces = _forces(fields.get("forces"))
+    joints, joint_fields = parse_joints(fields.get("joints"))
     if known_integrators is None:
         from massprops.dynamics.integrators import integrator_names
 
@@ -366,8 +373,14 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
         body, warnings = _mesh_body(body)
     else:
         body_source, inputs, warnings = "explicit", (), ()
-    return Scene(body, initial, forces, time, output, source=source, body_source=body_source,
-                 input_files=inputs, warnings=warnings)
+    scene = Scene(body, initial, forces, time, output, source=source, body_source=body_source,
+                  input_files=inputs, warnings=warnings, joints=joints)
+    if not joints:
+        return scene
+    initial_fields = read_optional_mapping(fields.get("initial"), _INITIAL_KEYS)
+    return bind_scene(scene, project=read_project(initial_fields),
+                      given=frozenset(initial_fields), joint_fields=joint_fields,
+                      initial_fields=initial_fields, initial_field=fields.get("initial"))
 
 
 def load_scene(path: str | os.PathLike[str], *,

@@ -21,6 +21,7 @@ from massprops.dynamics.forces import (
     DRAG,
     FORCE_BODY,
     FORCE_WORLD,
+    GRAVITY,
     SPRING,
     TORQUE_BODY,
     TORQUE_WORLD,
@@ -71,7 +72,10 @@ class SimulationResult:
 def choose_integrator(scene: Scene, program: ForceProgram, available: Mapping
                       ) -> tuple[str, str]:
     """(name, reason) for ``time.integrator: auto``."""
-    if not program.has_torque and program.translation_closed_form and "exact" in available:
+    if program.exact_solvable and "exact" in available:
+        if program.joints is not None and program.joints.closed_form:
+            return "exact", ("heavy symmetric top on a fixed point: closed form (Lagrange "
+                             "top), no time stepping")
         return "exact", "torque-free with constant force: closed-form solution, no time stepping"
     rate = program.stiffest_rate
     explicit_steps = scene.time.duration * rate / 2.8
@@ -82,7 +86,10 @@ def choose_integrator(scene: Scene, program: ForceProgram, available: Mapping
 
 
 def is_conservative(program: ForceProgram) -> bool:
-    """Energy is conserved: only gravity and undamped springs, no windows."""
+    """Energy is conserved: only gravity and undamped springs, no windows (a held body: judged
+    on its own forces and its joints' drive and damping)."""
+    if program.joints is not None:
+        program = program.joints.physical
     codes = program.codes
     if np.isin(codes, [FORCE_WORLD, FORCE_BODY, TORQUE_WORLD, TORQUE_BODY]).any():
         return False
@@ -93,6 +100,8 @@ def is_conservative(program: ForceProgram) -> bool:
 
 def cannot_gain_energy(program: ForceProgram) -> bool:
     """No term does external work (only gravity, springs, dampers, drag)."""
+    if program.joints is not None:
+        program = program.joints.physical
     return not np.isin(program.codes, [FORCE_WORLD, FORCE_BODY, TORQUE_WORLD, TORQUE_BODY]).any()
 
 
@@ -134,10 +143,11 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     else:
         reason = "chosen by the user"
     spec = INTEGRATORS[name]
-    if spec.kind == "exact" and (program.has_torque or not program.translation_closed_form):
+    if spec.kind == "exact" and not program.exact_solvable:
         raise UsageError(f"{scene.source}: integrator exact solves only torque-free scenes with "
-                         "constant forces (gravity, world-frame forces at the centre of mass); "
-                         "use auto, dop853 or a splitting method")
+                         "constant forces (gravity, world-frame forces at the centre of mass) "
+                         "and the heavy symmetric top on a fixed point; use auto, dop853 or a "
+                         "splitting method")
     duration = scene.time.duration
     t_out = sample_times(duration, every if every is not None else scene.output.every)
     setting = _setting(spec, scene, program, rtol, step)
@@ -164,13 +174,14 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
     conservative = is_conservative(program)
     traj = to_world(scene, run.t, run.y, program, with_energy=conservative
                     or cannot_gain_energy(program))
-    diagnostics = _diagnostics(program, run.y, traj, conservative)
+    floor = _energy_floor(program, scene.body.size, run.y[0])
+    diagnostics = _diagnostics(program, run.y, traj, conservative, floor)
     result = SimulationResult(
         integrator=name, reason=reason, steps=int(run.stats[0]),
         evaluations=int(run.stats[1]), rejected=int(run.stats[2]),
         wall_time_s=run.wall, warmup_time_s=run.warmup, trajectory=traj,
         diagnostics=diagnostics, interrupted=run.interrupted)
-    onset = _energy_blowup(traj)  # only scenes that cannot gain energy carry an energy
+    onset = _energy_blowup(traj, floor)  # only scenes that cannot gain energy carry an energy
     if onset is not None:  # name when it started, even if the state overflowed only later
         later = f" ({run.failure.split(': ', 1)[1].split(';')[0]})" if run.failure else ""
         raise DivergenceError(
@@ -287,32 +298,49 @@ def default_step(scene: Scene, program: ForceProgram, *, stiff: bool) -> float:
     return min(scene.time.duration / 1e3, 0.1 / rate) if rate > 0 else scene.time.duration / 1e3
 
 
-def _energy_blowup(traj: Trajectory) -> float | None:
+def _energy_floor(program: ForceProgram, size: float, y0: np.ndarray) -> float:
+    """An energy scale of the scene that does not vanish when the total energy happens to be
+    zero (a body at rest level with the origin of the potential): the initial kinetic energy,
+    m |g| × size per gravity term, k × size² per spring (J)."""
+    kinetic = 0.5 * program.mass * float(y0[3:6] @ y0[3:6]) + 0.5 * float(
+        program.inertia @ y0[10:13] ** 2)
+    own = program.joints.physical if program.joints is not None else program
+    rows = own.params[own.codes == GRAVITY]
+    weight = float(np.sum(np.linalg.norm(rows[:, 0:3], axis=1))) * size
+    springs = float(np.sum(own.params[own.codes == SPRING, 7])) * size * size
+    return kinetic + weight + springs
+
+
+def _energy_blowup(traj: Trajectory, floor: float = 0.0) -> float | None:
     """First sample time where the energy of a scene that cannot gain energy is no longer finite
-    or has grown ENERGY_BLOWUP-fold; None if it never does (or the scene has no energy)."""
+    or has grown ENERGY_BLOWUP-fold of its scale (|E0|, at least ``floor``, J); None if it never
+    does (or the scene has no energy)."""
     e = traj.energy
     if e is None or len(e) < 2:
         return None
-    scale = max(abs(e[0]), 1e-300)
+    scale = max(abs(e[0]), floor, 1e-300)
     with np.errstate(invalid="ignore"):
         bad = ~np.isfinite(e) | (e - e[0] > ENERGY_BLOWUP * scale)
     return float(traj.t[int(np.argmax(bad))]) if bad.any() else None
 
 
-def _diagnostics(program: ForceProgram, y: np.ndarray, traj: Trajectory, conservative: bool
-                 ) -> dict:
+def _diagnostics(program: ForceProgram, y: np.ndarray, traj: Trajectory, conservative: bool,
+                 floor: float = 0.0) -> dict:
     qn = np.abs(np.linalg.norm(y[:, 6:10], axis=1) - 1.0)
     out = {"energy_rel_drift": None, "angular_momentum_rel_drift": None,
-           "quaternion_norm_error": float(qn.max()), "error_estimate": None}
+           "quaternion_norm_error": float(qn.max()), "error_estimate": None,
+           "constraint_drift": None}
     if conservative and traj.energy is not None:
         e = traj.energy
         kinetic = 0.5 * program.mass * np.sum(y[0, 3:6] ** 2) + 0.5 * np.sum(
             program.inertia * y[0, 10:13] ** 2)
-        scale = max(abs(e[0]), kinetic, 1e-300)
+        scale = max(abs(e[0]), kinetic, floor, 1e-300)
         out["energy_rel_drift"] = float(np.max(np.abs(e - e[0])) / scale)
     if not program.has_torque:
         h = traj.angular_momentum
         scale = np.linalg.norm(h[0])
         drift = np.max(np.linalg.norm(h - h[0], axis=1))
         out["angular_momentum_rel_drift"] = float(drift / scale) if scale > 0 else float(drift)
+    if program.joints is not None:  # about the held point, and the joints' own drift
+        out.update(program.joints.diagnostics(y, traj))
     return out

@@ -21,6 +21,24 @@ COLUMNS = [
 ]
 """(Trajectory field, unit, column name(s)); world frame unless the name says body."""
 
+JOINT_COLUMNS = [
+    ("force_world", "N", ("fx", "fy", "fz")),
+    ("force_body", "N", ("fx_body", "fy_body", "fz_body")),
+    ("torque_world", "N*m", ("tx", "ty", "tz")),
+    ("torque_body", "N*m", ("tx_body", "ty_body", "tz_body")),
+]
+"""Reaction columns of each joint k (JointLoads field, unit, names prefixed ``j{k}_``): the force
+and, for a hinge, the torque the joint applies to the body; none for a free body."""
+
+
+def _joint_arrays(traj):
+    """(name, unit, labels, (n, 3) array) of every joint's reaction columns, scene order."""
+    for k, joint in enumerate(getattr(traj, "joints", ())):
+        for field, unit, labels in JOINT_COLUMNS:
+            value = getattr(joint, field)
+            if value is not None:
+                yield f"joint{k}_{field}", unit, tuple(f"j{k}_{lab}" for lab in labels), value
+
 
 def _table(traj) -> tuple[list[str], np.ndarray]:
     names, cols = [], []
@@ -31,6 +49,9 @@ def _table(traj) -> tuple[list[str], np.ndarray]:
         value = np.asarray(value, dtype=np.float64).reshape(len(traj.t), -1)
         labels = (labels,) if isinstance(labels, str) else labels
         names += [f"{lab} [{unit}]" if unit else lab for lab in labels]
+        cols.append(value)
+    for _, unit, labels, value in _joint_arrays(traj):
+        names += [f"{lab} [{unit}]" for lab in labels]
         cols.append(value)
     return names, np.hstack(cols)
 
@@ -44,6 +65,7 @@ def trajectory_bytes(traj, suffix: str) -> bytes:
     elif suffix == ".npz":
         arrays = {f: np.asarray(getattr(traj, f)) for f, _, _ in COLUMNS
                   if getattr(traj, f) is not None}
+        arrays.update({name: value for name, _, _, value in _joint_arrays(traj)})
         np.savez(buf, columns=np.array(names), **arrays)
     else:
         raise UsageError(f"trajectory file must end in .csv or .npz, got {suffix!r}")

@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from massprops.dynamics.exact import free_rotation_kernel
-from massprops.dynamics.forces import DRAG, SPRING, force_torque
+from massprops.dynamics.forces import DRAG, JOINT, SPRING, force_torque
 from massprops.dynamics.integrators._newton import lu_factor, lu_solve
 
 SPRING_STIFFNESS, SPRING_DAMPING = 7, 9
@@ -36,6 +36,8 @@ def kick_program(active, codes, params, mass, inertia, o):
     active_d/params_d: the velocity-dependent part alone (drag, spring damping with k = 0): a
     force exactly linear in z, f = B z, so B's columns are its values at unit vectors.
     has_c/has_d: each part has an active term; has_any: some term is active at all.
+    A joint's row (a held body, massprops.dynamics.joints) is in both parts: it takes out what
+    the joint carries from each part's total, which is linear, so the parts still add up.
     """
     k = codes.shape[0]
     active_c = np.zeros(k, dtype=np.bool_)
@@ -45,6 +47,9 @@ def kick_program(active, codes, params, mass, inertia, o):
     has_c = has_d = has_any = False
     for i in range(k):
         if not active[i]:
+            continue
+        if codes[i] == JOINT:
+            active_c[i] = active_d[i] = True
             continue
         has_any = True
         if codes[i] == DRAG:
