@@ -103,3 +103,15 @@ def exit_code(exc: BaseException) -> int:
     if isinstance(exc, OSError):  # the environment failed an input or output (disk full, ...)
         return 1
     return 3  # anything else is a failure of the computation itself (a bug)
+
+
+def error_message(exc: BaseException) -> str:
+    """The one line that reports ``exc`` (the CLI prefixes it with ``massprops: error: ``).
+
+    Our own errors already name the file and the fix; an OSError names its file and reason; any
+    other exception is a bug, said as such without a traceback."""
+    if isinstance(exc, MassPropsError):
+        return str(exc)
+    if isinstance(exc, OSError):
+        return f"{exc.filename or ''}: {exc.strerror or exc}".lstrip(": ")
+    return f"internal error: {type(exc).__name__}: {exc} (run with --debug for details)"

@@ -91,6 +91,10 @@ def sort_in_two(make_blocks: Callable[[], Callable[[int, int], tuple[np.ndarray,
         keys[zeros : zeros + k] = keys[keys.size - k :]
         keys[keys.size - k :] = moved
         split = zeros + tail_zeros
+    if not mid:  # fewer rows than two blocks: a thread would cost more than the sort it saves
+        keys[:split].sort()
+        keys[split:].sort()
+        return keys, split
     second = in_background(np.ndarray.sort, keys[split:])
     keys[:split].sort()
     second()

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 from rich.console import Console, Group
@@ -55,57 +57,63 @@ def _bar(e: np.ndarray | float) -> str:
     return f"± {float(np.max(e)):.1e}"
 
 
-def inspection_renderable(result) -> Group:
-    """A rich renderable for one `massprops.analysis.Inspection`."""
-    p, h = result.properties, result.health
-    bars = [b for b in (p.uncertainty.rounding, p.uncertainty.input, p.uncertainty.repair)
-            if b is not None]
+def inspection_renderable(data: dict, repaired: Iterable[str] | None = None) -> Group:
+    """A rich renderable for one inspection, given as its JSON object
+    (`massprops.analysis.Inspection.as_dict`, or a batch record's ``data``). ``repaired``: the
+    keys of ``data["repairs"]`` to list (the repairs that were asked for; default: all)."""
+    bars = [b for b in (data["uncertainty"]["rounding"], data["uncertainty"]["input"],
+                        data["uncertainty"].get("repair")) if b is not None]
+
+    def value(name: str) -> np.ndarray:
+        return np.asarray(data[name], dtype=float)
 
     def bound(name: str) -> np.ndarray:
-        return sum(np.asarray(getattr(b, name), dtype=float) for b in bars)
+        return sum(np.asarray(b[name], dtype=float) for b in bars)
 
-    kinds = ["round-off"] + (["float32 input"] if p.uncertainty.input is not None else []) + (
-        ["repair"] if p.uncertainty.repair is not None else [])
+    kinds = ["round-off"] + (["float32 input"] if data["uncertainty"]["input"] is not None
+                             else []) + (["repair"] if "repair" in data["uncertainty"] else [])
 
     head = Table(show_header=True, header_style="bold", box=None, padding=(0, 2),
-                 title=Text(result.mesh.name, style="bold"), title_justify="left")
+                 title=Text(data["file"], style="bold"), title_justify="left")
     head.add_column("quantity")
     head.add_column("value")
     head.add_column("error bar" + (f" ({' + '.join(kinds)})" if len(kinds) > 1 else ""))
-    _row(head, "volume [m³]", fmt(p.volume, float(bound("volume"))), _bar(bound("volume")))
-    _row(head, "mass [kg]", fmt(p.mass, float(bound("mass"))), _bar(bound("mass")))
-    _row(head, "density [kg/m³]", fmt(p.density), "")
-    _row(head, "centre of mass [m]", _vector(p.center_of_mass, bound("center_of_mass")),
+    _row(head, "volume [m³]", fmt(data["volume"], float(bound("volume"))), _bar(bound("volume")))
+    _row(head, "mass [kg]", fmt(data["mass"], float(bound("mass"))), _bar(bound("mass")))
+    _row(head, "density [kg/m³]", fmt(data["density"]), "")
+    _row(head, "centre of mass [m]", _vector(value("center_of_mass"), bound("center_of_mass")),
                  _bar(bound("center_of_mass")))
     _row(head, "principal moments [kg·m²]",
-                 _vector(p.principal_moments, bound("principal_moments")),
+                 _vector(value("principal_moments"), bound("principal_moments")),
                  _bar(bound("principal_moments")))
 
-    j = _matrix(p.inertia, bound("inertia"),
+    j = _matrix(value("inertia"), bound("inertia"),
                 f"inertia tensor about the centre of mass [kg·m²]  {_bar(bound('inertia'))}")
-    axes = _matrix(p.principal_axes, 0.0, "principal axes (columns, mesh frame)")
+    axes = _matrix(value("principal_axes"), 0.0, "principal axes (columns, mesh frame)")
 
     mesh = Table(show_header=False, box=None, padding=(0, 2), title="mesh",
                  title_justify="left")
-    for key, value in h.as_dict().items():
-        if isinstance(value, (list, tuple)):
-            value = ", ".join(fmt(float(v)) if isinstance(v, float) else str(v) for v in value)
-        _row(mesh, key, str(value))
+    for key, item in data["mesh"].items():
+        if isinstance(item, (list, tuple)):
+            item = ", ".join(fmt(float(v)) if isinstance(v, float) else str(v) for v in item)
+        _row(mesh, key, str(item))
 
     parts = [head, Text(""), j, Text(""), axes, Text(""), mesh]
-    if getattr(result, "repairs", None):
-        parts += [Text(""), _repairs_table(result.repairs)]
-    if result.warnings:
+    repairs = data.get("repairs") or {}
+    shown = {k: repairs[k] for k in (repairs if repaired is None else repaired)}
+    if shown:
+        parts += [Text(""), _repairs_table(shown)]
+    if data["warnings"]:
         parts.append(Text(""))
-        parts.extend(Text(f"warning: {w}", style="yellow") for w in result.warnings)
+        parts.extend(Text(f"warning: {w}", style="yellow") for w in data["warnings"])
     return Group(*parts, Text(""))
 
 
 def _repairs_table(repairs: dict) -> Table:
-    """What each repair did: one row per key of its record."""
+    """What each repair did: one row per key of its JSON record."""
     t = Table(show_header=False, box=None, padding=(0, 2), title="repairs", title_justify="left")
     for name, record in repairs.items():
-        for key, value in record.as_dict().items():
+        for key, value in record.items():
             if isinstance(value, float):
                 value = fmt(value)
             elif isinstance(value, list):
@@ -114,8 +122,9 @@ def _repairs_table(repairs: dict) -> Table:
     return t
 
 
-def print_inspection(result) -> None:
-    _console.print(inspection_renderable(result))
+def print_inspection(data: dict, repaired: Iterable[str] | None = None) -> None:
+    """Print one inspection (its JSON object) as the human table."""
+    _console.print(inspection_renderable(data, repaired))
 
 
 def print_alignment(input_path: str, output_path: str, alignment, repairs: dict | None = None
@@ -130,7 +139,7 @@ def print_alignment(input_path: str, output_path: str, alignment, repairs: dict 
     _console.print(t)
     _console.print(_matrix(alignment.rotation, 0.0, "rotation (rows: principal axes)"))
     if repairs:
-        _console.print(_repairs_table(repairs))
+        _console.print(_repairs_table({k: r.as_dict() for k, r in repairs.items()}))
 
 
 def print_simulation(scene, result) -> None:
@@ -215,3 +224,51 @@ def print_model(report, rtol: float | None = None) -> None:
     _console.print(t)
     for n in notes:
         _console.print(Text(n, style="yellow"))
+
+
+class BatchProgress:
+    """``inspect`` over many files: done/total, files per second, time left and failures, on
+    stderr. The CLI creates it only when stderr is a terminal; it appears once the batch has run
+    ``delay`` seconds (short batches print nothing) and leaves no trace when closed. Output lines
+    go above the bar: stderr's always, stdout's when it is the terminal too (a redirected stdout
+    is never touched)."""
+
+    def __init__(self, delay: float = 1.0) -> None:
+        import time
+
+        self.clock = time.monotonic
+        self.start = self.clock()
+        self.delay = delay
+        self.bar: Any = None
+        self.task: Any = None
+
+    def update(self, done: int, failed: int, total: int | None) -> None:
+        elapsed = self.clock() - self.start
+        if self.bar is None:
+            if elapsed < self.delay:
+                return
+            from rich.progress import BarColumn, Progress, TextColumn
+
+            self.bar = Progress(TextColumn("inspecting"), BarColumn(),
+                                TextColumn("{task.fields[text]}"),
+                                console=Console(stderr=True), transient=True,
+                                redirect_stdout=sys.stdout.isatty(), redirect_stderr=True)
+            self.bar.start()
+            self.task = self.bar.add_task("inspect", total=None, text="")
+        rate = done / elapsed if elapsed > 0 else 0.0
+        left = "" if total is None or rate <= 0 else f" · {_duration((total - done) / rate)} left"
+        text = (f"{done}/{'?' if total is None else total} files · {rate:.3g} files/s{left}"
+                + (f" · {failed} failed" if failed else ""))
+        self.bar.update(self.task, completed=done, total=total, text=text)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+            self.bar = None
+
+
+def _duration(seconds: float) -> str:
+    seconds = int(round(seconds))
+    hours, rest = divmod(seconds, 3600)
+    minutes, secs = divmod(rest, 60)
+    return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"

@@ -111,7 +111,7 @@ def _input_format(src: Source, format_name: str | None) -> Format:
         raise UsageError(
             f"{src.name}: the format of a stream cannot be guessed; name it (--input-format)"
         )
-    return format_of_path(src.path)
+    return format_of_path(src.path, name=src.name)
 
 
 def _with_companions(protect: Sequence[PathLike]) -> list[Path]:

@@ -94,9 +94,10 @@ def format_named(name: str) -> Format:
     return FORMATS[key]
 
 
-def format_of_path(path: Path, *, for_writing: bool = False) -> Format:
+def format_of_path(path: Path, *, for_writing: bool = False, name: str | None = None) -> Format:
     """The format of ``path`` from its extension (case-insensitive); for writing, one with a
-    writer. Raises UnknownFormatError listing the known extensions."""
+    writer. Raises UnknownFormatError listing the known extensions, naming the file ``name``
+    (default: the path; a batch worker reads an absolute path the user gave as relative)."""
     suffix = path.suffix.lower()
     for fmt in FORMATS.values():
         if suffix in fmt.extensions and (fmt.can_write or not for_writing):
@@ -105,6 +106,6 @@ def format_of_path(path: Path, *, for_writing: bool = False) -> Format:
     known = ", ".join(sorted(ext for f in usable for ext in f.extensions))
     action = "write" if for_writing else "read"
     raise UnknownFormatError(
-        f"{path}: cannot {action} files with extension {path.suffix or '(none)'!r}; "
-        f"known: {known}"
+        f"{path if name is None else name}: cannot {action} files with extension "
+        f"{path.suffix or '(none)'!r}; known: {known}"
     )

@@ -22,6 +22,7 @@ _IS_SPACE[[9, 10, 11, 12, 13, 32]] = True
 _NEWLINE = 10
 _COMMENT = re.compile(rb"#[^\n]*")
 _LEADING_BLANKS = re.compile(rb"^[ \t]+", re.MULTILINE)
+_FEW_RUNS = 64  # gather: up to this many runs of consecutive lines are copied as byte ranges
 
 
 def strip_comments(data: bytes) -> bytes:
@@ -71,8 +72,24 @@ class TextLines:
         return np.flatnonzero(hit & _IS_SPACE[after])
 
     def gather(self, lines: np.ndarray, skip: int = 0) -> bytes:
-        """Lines ``lines`` (indices, ascending) without their first ``skip`` bytes, each ending
-        with a newline: one block the number parsers read at C speed."""
+        """Lines ``lines`` (indices, ascending) without their first ``skip`` bytes (or with
+        them blanked, which no tokenizer tells apart), each ending with a newline: one block the
+        number parsers read at C speed."""
+        runs = np.flatnonzero(np.diff(lines) != 1) + 1
+        if lines.size and runs.size < _FEW_RUNS:
+            # The usual file keeps each kind of line together: copy the few byte ranges whole
+            # and blank the keywords, instead of marking every byte (~3x faster).
+            first = np.concatenate(([0], runs))
+            last = np.concatenate((runs, [lines.size])) - 1
+            lo, hi = self.starts[lines[first]], self.ends[lines[last]] + 1
+            out = bytearray(b"".join(self.data[a:b] for a, b in zip(lo.tolist(), hi.tolist())))
+            if skip:
+                shift = np.repeat(np.cumsum(hi - lo) - (hi - lo) - lo, last - first + 1)
+                at = self.starts[lines] + shift
+                view = np.frombuffer(out, dtype=np.uint8)
+                for j in range(skip):
+                    view[at + j] = 32
+            return bytes(out)
         buf = np.frombuffer(self.data, dtype=np.uint8)
         # Mark [start + skip, end] (the newline included) of every chosen line with a running sum
         # of +1/-1 steps: one pass over the buffer whatever the number of lines.
