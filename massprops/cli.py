@@ -30,6 +30,11 @@ def _say_warning(name: str, message: str) -> None:
     click.echo(f"massprops: warning: {name}: {message}", err=True)
 
 
+def _say_note(message: str) -> None:
+    """A note on stderr while something slow and one-off happens (never on --json stdout)."""
+    click.echo(f"massprops: {message}", err=True)
+
+
 def _guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
     """Run ``fn``; turn any exception into one stderr line and the contract's exit code."""
     try:
@@ -245,7 +250,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
     interrupted = []
 
     def run() -> None:
-        from massprops.dynamics._jit import start_numba_lean
+        from massprops.dynamics.compiling import whole_process
         from massprops.dynamics.scene import load_scene
         from massprops.dynamics.simulate import simulate as run_scene
         from massprops.errors import DivergenceError
@@ -263,10 +268,10 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             sampling = scene.time.duration / 1000
         protect = [scene_path, *scene.input_files]
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
-        start_numba_lean()
+        whole_process()
         try:
             result = run_scene(scene, integrator=integrator, rtol=rtol, step=step,
-                               every=sampling, progress=progress)
+                               every=sampling, progress=progress, notice=_say_note)
         except DivergenceError as exc:  # keep what was computed, then fail with exit 3
             if out and exc.partial is not None:
                 _save(exc.partial, out, None, force, protect)
@@ -308,7 +313,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
     measured against the exact solution or a much tighter, checked reference run."""
 
     def run() -> None:
-        from massprops.dynamics._jit import start_numba_lean
+        from massprops.dynamics.compiling import whole_process
         from massprops.dynamics.precision import precision as run_ladders
         from massprops.dynamics.scene import load_scene
 
@@ -318,10 +323,10 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
             require_matplotlib()
         scene = load_scene(scene_path)
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
-        start_numba_lean()
+        whole_process()
         try:
             report = run_ladders(scene, integrators=[i for i in integrators if i != "auto"],
-                                 progress=progress)
+                                 progress=progress, notice=_say_note)
         finally:
             progress.close()
         if plot_path:

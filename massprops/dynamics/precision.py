@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.dynamics.accuracy import Scales, exact_roundoff, global_estimate, state_error
+from massprops.dynamics.compiling import prepare
 from massprops.dynamics.forces import ForceProgram, compile_forces
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.model import Scene
@@ -98,8 +99,12 @@ def ladder(spec, scene: Scene, program: ForceProgram) -> list[float]:
 
 
 def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
-              progress: Callable[[float], None] | None = None) -> PrecisionReport:
-    """Run the ladders of ``integrators`` (default: every applicable one) on ``scene``."""
+              progress: Callable[[float], None] | None = None,
+              notice: Callable[[str], None] | None = None) -> PrecisionReport:
+    """Run the ladders of ``integrators`` (default: every applicable one) on ``scene``.
+
+    notice(text) is called once if compiled kernels are missing from numba's cache and are being
+    compiled (all of them are made ready first: massprops.dynamics.compiling.prepare)."""
     from massprops.dynamics.integrators import INTEGRATORS
 
     program = compile_forces(scene)
@@ -111,6 +116,8 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
                              f"to this scene; applicable: {', '.join(names)}")
         names = [n for n in names if n in integrators]
     t_out = np.linspace(0.0, scene.time.duration, SAMPLES + 1)
+    prepare([*names, reference_method(scene, program, INTEGRATORS),
+             *(["dop853"] if any(INTEGRATORS[n].stiff for n in names) else [])], notice)
     truth, reference = reference_run(scene, program, INTEGRATORS, t_out)
     scales = Scales.of(scene.body.size, truth, scene.time.duration)
     plan = [(n, s) for n in names for s in ladder(INTEGRATORS[n], scene, program)]
@@ -127,6 +134,13 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
     return PrecisionReport(reference, tuple(runs))
 
 
+def reference_method(scene: Scene, program: ForceProgram, registry: Mapping) -> str:
+    """The integrator of `reference_run`: exact, implicit (stiff scenes) or dop853."""
+    if "exact" in applicable(scene, program, registry):
+        return "exact"
+    return "implicit" if choose_integrator(scene, program, registry)[0] == "implicit" else "dop853"
+
+
 def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out: np.ndarray):
     """(trajectory, description) of the truth the ladders are measured against.
 
@@ -135,14 +149,14 @@ def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out:
     scenes, the implicit method at a step 4× finer than its finest rung checked against twice
     that step by Richardson's rule.
     """
-    if "exact" in applicable(scene, program, registry):
+    method = reference_method(scene, program, registry)
+    if method == "exact":
         truth = _trajectory(scene, program, registry["exact"], 0.0, t_out)
         scales = Scales.of(scene.body.size, truth, scene.time.duration)
         return truth, {"kind": "exact", "integrator": "exact", "setting": None,
                        "accuracy": exact_roundoff(truth, scales),
                        "checked": "closed form; accuracy is its round-off bound"}
-    stiff = choose_integrator(scene, program, registry)[0] == "implicit"
-    if stiff:
+    if method == "implicit":
         spec = registry["implicit"]
         fine = ladder(spec, scene, program)[-1] / 4
         truth, check, coarse = (_trajectory(scene, program, spec, k * fine, t_out)

@@ -17,6 +17,7 @@ from massprops.dynamics.accuracy import (
     global_estimate,
     state_error,
 )
+from massprops.dynamics.compiling import prepare
 from massprops.dynamics.forces import (
     DRAG,
     FORCE_BODY,
@@ -113,12 +114,15 @@ def sample_times(duration: float, every: float | None) -> np.ndarray:
 # --- the run -----------------------------------------------------------------------------------
 def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None = None,
              step: float | None = None, every: float | None = None,
-             progress: Callable[[float], None] | None = None) -> SimulationResult:
+             progress: Callable[[float], None] | None = None,
+             notice: Callable[[str], None] | None = None) -> SimulationResult:
     """Integrate ``scene``; options override the scene's time/output settings.
 
     progress(fraction) is called between compiled chunks of the main run, and while waiting for
     the error estimate's companion runs (on a helper thread, see `_start_companions`), always on
-    the calling thread. Ctrl-C during the run returns the samples computed so far with
+    the calling thread. notice(text) is called once, on the calling thread, if the run's
+    compiled kernels are not in numba's cache and are being compiled (massprops.dynamics
+    .compiling.prepare). Ctrl-C during the run returns the samples computed so far with
     ``interrupted=True`` (the caller exits 130).
     Raises DivergenceError (exit 3) naming the time and the likely cause.
     """
@@ -141,6 +145,7 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     duration = scene.time.duration
     t_out = sample_times(duration, every if every is not None else scene.output.every)
     setting = _setting(spec, scene, program, rtol, step)
+    prepare(kernels_needed(spec, setting, program), notice)
     side = _start_companions(scene, program, spec, setting, t_out)
     wait = True
     try:
@@ -153,6 +158,12 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
             side.stop()
         elif side is not None:
             side.cancel()
+
+
+def kernels_needed(spec, setting: float, program: ForceProgram) -> list[str]:
+    """The integrators whose compiled kernels a run of ``spec`` at ``setting`` calls: its own,
+    and dop853 when the stiffness probe will run (stiffness.unresolved)."""
+    return [spec.name, *(["dop853"] if unresolved(spec, setting, program) else [])]
 
 
 def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
