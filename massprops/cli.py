@@ -36,20 +36,23 @@ def _say_note(message: str) -> None:
 
 
 def _guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
-    """Run ``fn``; turn any exception into one stderr line and the contract's exit code."""
+    """Run ``fn``; turn any exception into one stderr line and the contract's exit code (with
+    --debug: its traceback instead of the line, and the same exit code)."""
     try:
         fn()
         return 0
     except KeyboardInterrupt:
         raise
-    except MassPropsError as exc:
+    except Exception as exc:
         if ctx.obj.get("debug"):
-            raise
-        _say_error(str(exc))
-        return exit_code(exc)
-    except Exception as exc:  # a bug or an environment failure: say what, not a traceback
-        if ctx.obj.get("debug"):
-            raise
+            import traceback
+
+            traceback.print_exc()
+            return exit_code(exc)
+        if isinstance(exc, MassPropsError):
+            _say_error(str(exc))
+            return exit_code(exc)
+        # a bug or an environment failure: say what, not a traceback
         if isinstance(exc, OSError):
             _say_error(f"{exc.filename or ''}: {exc.strerror or exc}".lstrip(": "))
         else:
@@ -242,10 +245,14 @@ class _Progress:
               help="PNG of angular velocity, energy and angular-momentum drift over time.")
 @click.option("--force", is_flag=True, help="Replace existing output files.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+@click.option("--max-steps", type=click.IntRange(min=1), default=None,
+              help="Steps a run may take (default 2e7); beyond it the run is refused or "
+                   "stopped, keeping what it computed.")
 @click.pass_context
 def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: str | None,
              integrator: str | None, rtol: float | None, step: float | None,
-             every: float | None, plot_path: str | None, force: bool, quiet: bool) -> None:
+             every: float | None, plot_path: str | None, force: bool, quiet: bool,
+             max_steps: int | None) -> None:
     """Integrate the Newton-Euler equations of the one body in SCENE (YAML, SI units)."""
     interrupted = []
 
@@ -253,7 +260,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         from massprops.dynamics.compiling import whole_process
         from massprops.dynamics.scene import load_scene
         from massprops.dynamics.simulate import simulate as run_scene
-        from massprops.errors import DivergenceError
+        from massprops.errors import DivergenceError, RunBudgetError
 
         if plot_path:
             from massprops.dynamics.plots import require_matplotlib
@@ -271,8 +278,9 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         whole_process()
         try:
             result = run_scene(scene, integrator=integrator, rtol=rtol, step=step,
-                               every=sampling, progress=progress, notice=_say_note)
-        except DivergenceError as exc:  # keep what was computed, then fail with exit 3
+                               every=sampling, progress=progress, notice=_say_note,
+                               max_steps=max_steps)
+        except (DivergenceError, RunBudgetError) as exc:  # keep what was computed, exit 3
             if out and exc.partial is not None:
                 _save(exc.partial, out, None, force, protect)
             raise

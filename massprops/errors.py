@@ -71,6 +71,16 @@ class DivergenceError(ComputationError):
         self.partial = partial
 
 
+class RunBudgetError(ComputationError):
+    """A run would need, or has taken, more steps or samples than the run bound allows
+    (massprops.dynamics.budget): refused up front, or stopped with ``partial`` holding what was
+    computed (a SimulationResult, or None when nothing ran)."""
+
+    def __init__(self, message: str, partial: object = None) -> None:
+        super().__init__(message)
+        self.partial = partial
+
+
 #: The contract's exit-code table; the three branches are disjoint, so order does not matter.
 EXIT_CODES: dict[type[MassPropsError], int] = {
     InputError: 1,

@@ -38,6 +38,12 @@ float64 arrays, numpy scalars functions and the math module)."""
 inner = njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 """Decorator: a compiled helper called only from compiled code (calling it from Python raises)."""
 
+inlined = njit(inline="always")
+"""Decorator: a compiled helper whose body numba copies into its caller (one call site, or a
+few). Every separately compiled function that calls a large one (the right-hand side, the free
+rotation) makes LLVM optimise that large one once more, when it is linked in; a caller that is
+inlined instead costs only its own body's typing."""
+
 kernel = njit(cache=True, nogil=True)
 """Decorator of an integrator's entry kernel, the one compiled function Python calls per segment.
 It releases the GIL while it runs, so that simulate's error-estimate companion run steps on a
@@ -95,4 +101,5 @@ def start_numba_lean() -> None:
                 del sys.modules[name]
 
 
-__all__ = ["COMPILED_OPTIONS", "LEAN_SKIPPED", "inner", "jit", "kernel", "start_numba_lean"]
+__all__ = ["COMPILED_OPTIONS", "LEAN_SKIPPED", "inlined", "inner", "jit", "kernel",
+           "start_numba_lean"]

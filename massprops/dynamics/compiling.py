@@ -124,7 +124,7 @@ def warm_up(name: str) -> None:
     y = np.zeros(13)
     y[6] = 1.0
     arrays = (np.ones(1, dtype=np.bool_), np.array([GRAVITY], dtype=np.int64),
-              np.zeros((1, NPAR)), 1.0, np.array([1.0, 2.0, 3.0]), np.ones(4))
+              np.zeros((1, NPAR)), 1.0, np.array([1.0, 2.0, 3.0]), np.ones(4), 1000)
     setting = 1e-6 if spec.kind == "adaptive" else 1e-9
     spec.run_segment(y, 0.0, 1e-9, setting, arrays, False, np.empty(0), np.empty((0, 13)),
                      np.zeros(5, dtype=np.int64))

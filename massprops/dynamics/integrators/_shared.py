@@ -13,7 +13,7 @@ import numpy as np
 
 from massprops.dynamics._jit import inner
 from massprops.dynamics.exact import QUATERNION_RENORM
-from massprops.dynamics.forces import rhs
+from massprops.dynamics.forces import force_torque, rhs
 
 R_BLOCK, V_BLOCK, Q_BLOCK, W_BLOCK = range(4)
 """Blocks of the state, for error scales: position, velocity, quaternion, angular velocity."""
@@ -29,6 +29,13 @@ STEP_UNDERFLOW = 1e-14
 def f(y, prog, out):
     """out = ẏ(y) for the program ``prog``; see forces.rhs."""
     rhs(y, prog[0], prog[1], prog[2], prog[3], prog[4], prog[5], out)
+
+
+@inner
+def ft(y, o, active, codes, params):
+    """forces.force_torque, compiled once and cached: the splitting kicks call it from three
+    places, which would otherwise each compile it."""
+    return force_torque(y, o, active, codes, params)
 
 
 @inner
@@ -64,10 +71,16 @@ def blocks(n):
 @inner
 def project_quaternion(y, o):
     """Re-normalise the quaternion y[o:o+4] in place (projection onto the unit sphere) once its
-    squared norm is off 1 by more than QUATERNION_RENORM (why not always: see there)."""
+    squared norm is off 1 by more than QUATERNION_RENORM (why not always: see there).
+
+    A quaternion whose norm is zero or not finite is no rotation any more (a diverged step: the
+    division would turn an overflowing one into [0, 0, 0, 0], finite and wrong): y[o] is set to
+    NaN so that the kernel's finiteness check stops there."""
     n2 = y[o] * y[o] + y[o + 1] * y[o + 1] + y[o + 2] * y[o + 2] + y[o + 3] * y[o + 3]
     s = math.sqrt(n2)
-    if s > 0.0 and abs(n2 - 1.0) > QUATERNION_RENORM:
+    if not (s > 0.0 and s < math.inf):
+        y[o] = math.nan
+    elif abs(n2 - 1.0) > QUATERNION_RENORM:
         for i in range(o, o + 4):
             y[i] /= s
 

@@ -19,8 +19,9 @@ from numba import njit
 
 from massprops.dynamics._jit import inner, jit
 from massprops.dynamics.exact import free_rotation_kernel
-from massprops.dynamics.forces import DRAG, SPRING, force_torque
+from massprops.dynamics.forces import DRAG, SPRING
 from massprops.dynamics.integrators._newton import lu_factor, lu_solve
+from massprops.dynamics.integrators._shared import ft
 
 SPRING_STIFFNESS, SPRING_DAMPING = 7, 9
 """Columns of a SPRING row of ``params`` (see forces.NPAR): k (N/m) and c (N·s/m)."""
@@ -111,12 +112,12 @@ def kick(y, tau_a, tau_b, kp, wk):
 @njit(cache=True, inline="always")
 def exact_kick(y, tau, codes, active_c, params_c, mass, inertia, o):
     """z += tau M⁻¹ F_c(r, q): the exact flow of the configuration-dependent forces."""
-    ft = force_torque(y, o, active_c, codes, params_c)
+    f6 = ft(y, o, active_c, codes, params_c)
     if o == 6:
         for i in range(3):
-            y[3 + i] += tau * ft[i] / mass
+            y[3 + i] += tau * f6[i] / mass
     for i in range(3):
-        y[o + 4 + i] += tau * ft[3 + i] / inertia[i]
+        y[o + 4 + i] += tau * f6[3 + i] / inertia[i]
 
 
 @inner
@@ -129,10 +130,10 @@ def damped_kick(y, tau_a, tau_b, kp, wk):
     shift = 0 if o == 6 else 3
     nfev = 0
     if has_c:
-        ft = force_torque(y, o, active_c, codes, params_c)
+        f6 = ft(y, o, active_c, codes, params_c)
         nfev += 1
         for i in range(nz):
-            fc[i] = ft[i + shift]
+            fc[i] = f6[i + shift]
     else:
         for i in range(nz):
             fc[i] = 0.0
@@ -157,9 +158,9 @@ def damping_matrix(y, kp, ytmp, b):
     for j in range(nz):
         for i in range(nz):
             ytmp[z_index(i, o)] = 1.0 if i == j else 0.0
-        ft = force_torque(ytmp, o, active_d, codes, params_d)
+        f6 = ft(ytmp, o, active_d, codes, params_d)
         for i in range(nz):
-            b[i, j] = ft[i + shift]
+            b[i, j] = f6[i + shift]
     return nz
 
 

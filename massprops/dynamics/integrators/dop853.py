@@ -47,6 +47,7 @@ from massprops.dynamics.integrators.base import (
     REJECTED,
     STATUS,
     STATUS_NONFINITE,
+    STATUS_STEP_LIMIT,
     STATUS_STEP_UNDERFLOW,
     STEPS,
     IntegratorSpec,
@@ -160,7 +161,7 @@ def _dense_row(cont, s, out, o):
 
 @kernel
 def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-            stats, floors):
+            stats, floors, max_steps):
     prog = (active, codes, params, mass, inertia, rot_only)
     n = y.shape[0]
     o = quat_offset(n)
@@ -190,6 +191,9 @@ def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_o
             h = t1 - t
         if too_small(h, t, t0, t1):
             stats[STATUS] = STATUS_NONFINITE if nonfinite else STATUS_STEP_UNDERFLOW
+            break
+        if stats[STEPS] >= max_steps:
+            stats[STATUS] = STATUS_STEP_LIMIT
             break
         _stages(y, h, k, np.int64(1), np.int64(12), prog, tmp)  # not literals: one compile
         for i in range(n):

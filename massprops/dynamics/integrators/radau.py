@@ -67,6 +67,7 @@ from massprops.dynamics.integrators.base import (
     REJECTED,
     STATUS,
     STATUS_NONFINITE,
+    STATUS_STEP_LIMIT,
     STATUS_STEP_UNDERFLOW,
     STEPS,
     IntegratorSpec,
@@ -239,7 +240,7 @@ def _emit(y, z, t, h, t_next, ynew, qpoly, t_out, y_out, k, o):
 
 @kernel
 def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-            stats, floors):
+            stats, floors, max_steps):
     prog = (active, codes, params, mass, inertia, rot_only)
     n = y.shape[0]
     o = quat_offset(n)
@@ -263,6 +264,9 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
         hs = big_h * 0.5 ** level
         clean = True
         while t < tb and status == 0:
+            if stats[STEPS] >= max_steps:  # Newton failures cut steps into pieces: bounded
+                status = STATUS_STEP_LIMIT
+                break
             h, t_next = piece(t, tb, hs)
             if not fresh and h_lu == 0.0:
                 f(y, prog, f0)

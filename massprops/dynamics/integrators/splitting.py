@@ -49,7 +49,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics._jit import inner, jit, kernel
+from massprops.dynamics._jit import inlined, jit, kernel
 from massprops.dynamics.integrators._shared import (
     all_finite,
     copy_into,
@@ -119,7 +119,7 @@ def composed_step(y, h, gam, kp, wk, dw):
     return nfev
 
 
-@inner
+@inlined
 def _emit_partial(y_a, y_b, t_a, t_b, gam, kp, wk, dw, part, t_out, y_out, k):
     """Fill y_out rows from k on whose times are <= t_b (the step t_a -> t_b from y_a to y_b):
     a partial step of length t_out[k] - t_a from y_a, or y_b itself at t_b. Returns (next k,
@@ -136,7 +136,7 @@ def _emit_partial(y_a, y_b, t_a, t_b, gam, kp, wk, dw, part, t_out, y_out, k):
     return k, nfev
 
 
-@inner
+@inlined
 def _richardson(y_a, y_b, h, gam, order, kp, wk, dw, part):
     """Local error (max-norm, absolute) of the step y_a -> y_b of length h: 2^p/(2^p - 1) of its
     difference from two half steps. Returns (error, evaluations used)."""
