@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics._jit import inner, kernel
+from massprops.dynamics._jit import inlined, inner, kernel
 from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, D
 from massprops.dynamics.integrators._shared import (
     all_finite,
@@ -103,7 +103,7 @@ def _error_norms(k, h, ynew, blk, scales, rtol, trial):
     return err, local
 
 
-@inner
+@inlined
 def _initial_step(y, f0, rtol, hmax, blk, scales, prog, y1, f1):
     """Hairer's HINIT for order 8: h ~ 0.01 × (time scale of y from f and from f's change).
     Components with a zero scale (a block that is exactly zero) are left out. 1 evaluation."""

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics._jit import inner, kernel
+from massprops.dynamics._jit import inlined, inner, kernel
 from massprops.dynamics.integrators._newton import (
     CONVERGED,
     DIVERGED,
@@ -117,7 +117,7 @@ def _solve(y, h, z, prog, lu, piv, g, tmp, fz, blk, scales, trial, eta):
     return DIVERGED, MAX_ITER, theta, eta, MAX_ITER
 
 
-@inner
+@inlined
 def _richardson(y, h, y_full, jac, prog, lu, piv, g, tmp, fz, blk, scales, trial, z, mid, end):
     """(local error of the step y -> y_full of length h: 4/3 of its difference from two half
     steps, max-norm; evaluations). 0 if a half step does not converge (never seen: half steps

@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics._jit import inner, kernel
+from massprops.dynamics._jit import inlined, inner, kernel
 from massprops.dynamics.integrators._newton import (
     CONVERGED,
     DIVERGED,
@@ -190,7 +190,7 @@ def _newton(y, h, z, w, fz, prog, lr, pr, lc, pc, rr, rc, tmp, blk, scales, tria
     return DIVERGED, MAX_ITER, theta, eta, nfev
 
 
-@inner
+@inlined
 def _richardson(y, h, y_full, qpoly, jac, prog, lr, pr, lc, pc, z, w, fz, rr, rc, tmp, blk,
                 scales, trial, mid, end):
     """(local error of the step y -> y_full of length h with collocation polynomial ``qpoly``:

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics._jit import inner, kernel
+from massprops.dynamics._jit import inlined, inner, kernel
 from massprops.dynamics.integrators._shared import (
     all_finite,
     copy_into,
@@ -57,7 +57,7 @@ def rk4_step(y, k1, h, prog, out, k2, k3, k4, tmp):
     project_quaternion(out, quat_offset(n))
 
 
-@inner
+@inlined
 def _richardson(y, fy, h, y_full, prog, k2, k3, k4, tmp, mid, fmid, end):
     """Local error (max-norm, absolute) of the RK4 step y -> y_full of length h: 16/15 of its
     difference from two half steps. 7 evaluations."""
