@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -34,29 +35,35 @@ FIRST_TARGET_S, EXACT_TARGET_S = 3.0, 1.0
 
 
 def run_process(tree: Path, args: list[str], cache: Path
-                ) -> tuple[float, subprocess.CompletedProcess]:
-    """Wall seconds and result of ``python -m massprops ARGS`` importing massprops from ``tree``
-    with numba's cache in ``cache``."""
+                ) -> tuple[float, float, subprocess.CompletedProcess]:
+    """Wall and CPU (user + system, the process and the helpers it waited for) seconds and the
+    result of ``python -m massprops ARGS`` importing massprops from ``tree``, numba's cache in
+    ``cache``. CPU seconds are less sensitive than wall seconds to other jobs on the machine."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(tree))
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "massprops", *args], cwd=tree, env=env,
                           capture_output=True, text=True)
-    return time.perf_counter() - start, proc
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu, proc
 
 
 def measure(tree: Path, args: list[str], warm: int) -> dict:
     """Cold (empty cache) and best-of-``warm`` warm wall times of one command."""
     cache = Path(tempfile.mkdtemp(prefix="massprops-numba-"))
     try:
-        cold, proc = run_process(tree, args, cache)
+        cold, cold_cpu, proc = run_process(tree, args, cache)
         notice_cold = "compiling" in proc.stderr
         stdout_clean = "compiling" not in proc.stdout
         warm_times, notice_warm = [], False
         for _ in range(warm):
-            t, again = run_process(tree, args, cache)
+            t, _, again = run_process(tree, args, cache)
             warm_times.append(t)
             notice_warm |= "compiling" in again.stderr
-        return {"cold": cold, "warm": min(warm_times), "exit": proc.returncode,
+        return {"cold": cold, "cold_cpu": cold_cpu, "warm": min(warm_times),
+                "exit": proc.returncode,
                 "notice_cold": notice_cold, "notice_warm": notice_warm,
                 "stdout_clean": stdout_clean, "integrator": _integrator(proc.stdout)}
     finally:
@@ -82,14 +89,14 @@ def main() -> None:
         p.stem for p in SCENES.glob("*.yaml"))
     trees = {"this": ROOT} | ({"other": Path(args.tree).resolve()} if args.tree else {})
     print(f"{'scene':18s} {'integrator':11s} " + " ".join(
-        f"{label + ' cold':>10s} {label + ' warm':>10s}" for label in trees) + "  notes")
+        f"{label + ' cold (cpu)':>17s} {label + ' warm':>10s}" for label in trees) + "  notes")
     worst_first, worst_exact = 0.0, 0.0
     for name in names:
         scene = str(SCENES / f"{name}.yaml")
         cells, notes, integrator = [], [], "-"
         for label, tree in trees.items():
             m = measure(tree, ["simulate", scene, "--json", "--quiet"], args.warm)
-            cells.append(f"{m['cold']:10.2f} {m['warm']:10.2f}")
+            cells.append(f"{m['cold']:8.2f} ({m['cold_cpu']:5.2f}) {m['warm']:10.2f}")
             if label == "this":
                 integrator = m["integrator"]
                 worst_first = max(worst_first, m["cold"])
@@ -106,7 +113,7 @@ def main() -> None:
         cells = []
         for tree in trees.values():
             m = measure(tree, ["precision", scene, "--json", "--quiet"], 1)
-            cells.append(f"{m['cold']:10.2f} {m['warm']:10.2f}")
+            cells.append(f"{m['cold']:8.2f} ({m['cold_cpu']:5.2f}) {m['warm']:10.2f}")
         print(f"{'precision ' + args.precision:30s} " + " ".join(cells))
     print(f"first simulate, worst scene: {worst_first:.2f} s (target {FIRST_TARGET_S} s); "
           f"first exact run, worst: {worst_exact:.2f} s (target {EXACT_TARGET_S} s)")

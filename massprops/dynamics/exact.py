@@ -83,6 +83,11 @@ computed from a mesh differ by a few ulps); the symmetric solution then differs 
 of the given moments by at most ~SYMMETRY_RTOL·|ω|·t (2e-13 rad at |ω|t = 100), below the target
 accuracy. Any larger asymmetry goes through the elliptic branch, which resolves it exactly."""
 
+EVAL_BLOCK = 65536
+"""Instants evaluated together by numpy in `free_rotation`: the temporaries of a block (~100
+arrays of it) stay in cache and in memory bounds; measured fastest (1.2 µs per instant of an
+asymmetric body, against 1.9 µs for 2e5 at once and 3 µs in blocks of 1000)."""
+
 NEGLIGIBLE_COMPONENT = 2.0 ** -450
 """Components of ω' smaller than this (3.5e-136) times the largest are set to zero. Their squares,
 times a moment difference, would underflow the separatrix distance below; the motion they would
@@ -455,10 +460,14 @@ def free_rotation(inertia, q0, omega0, t) -> tuple[np.ndarray, np.ndarray]:
         w0 = perm.T @ w0
         moments = moments[np.argsort(moments, kind="stable")]
     flat = times.reshape(-1)
+    motion = _prepared(moments, q0, w0)
+    out_q, out_w = np.empty((flat.size, 4)), np.empty((flat.size, 3))
     with np.errstate(all="ignore"):  # both sides of each elementwise choice are evaluated
-        q, w = _motion(*_prepared(moments, q0, w0), flat)
-    out_q = np.stack(np.broadcast_arrays(*q, flat)[:4], axis=-1)
-    out_w = np.stack(np.broadcast_arrays(*w, flat)[:3], axis=-1)
+        for start in range(0, flat.size, EVAL_BLOCK):
+            part = flat[start:start + EVAL_BLOCK]
+            q, w = _motion(*motion, part)
+            out_q[start:start + part.size] = np.stack(np.broadcast_arrays(*q, part)[:4], -1)
+            out_w[start:start + part.size] = np.stack(np.broadcast_arrays(*w, part)[:3], -1)
     if perm is not None:
         out_q = quat_multiply(out_q, quat_conjugate(q_perm))
         out_w = out_w @ perm.T
