@@ -39,8 +39,14 @@ def _say_warning(name: str, message: str) -> None:
     click.echo(f"massprops: warning: {name}: {message}", err=True)
 
 
+def _say_note(message: str) -> None:
+    """A note on stderr while something slow and one-off happens (never on --json stdout)."""
+    click.echo(f"massprops: {message}", err=True)
+
+
 def _guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
-    """Run ``fn``; turn any exception into one stderr line and the contract's exit code."""
+    """Run ``fn``; turn any exception into one stderr line and the contract's exit code (with
+    --debug: its traceback instead of the line, and the same exit code)."""
     try:
         fn()
         return 0
@@ -48,7 +54,10 @@ def _guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
         raise
     except Exception as exc:  # ours, a bug or an environment failure: one line, no traceback
         if ctx.obj.get("debug"):
-            raise
+            import traceback
+
+            traceback.print_exc()
+            return exit_code(exc)
         _say_error(error_message(exc))
         return exit_code(exc)
 
@@ -572,18 +581,22 @@ class _Progress:
               help="PNG of angular velocity, energy and angular-momentum drift over time.")
 @click.option("--force", is_flag=True, help="Replace existing output files.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+@click.option("--max-steps", type=click.IntRange(min=1), default=None,
+              help="Steps a run may take (default 2e7); beyond it the run is refused or "
+                   "stopped, keeping what it computed.")
 @click.pass_context
 def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: str | None,
              integrator: str | None, rtol: float | None, step: float | None,
-             every: float | None, plot_path: str | None, force: bool, quiet: bool) -> None:
+             every: float | None, plot_path: str | None, force: bool, quiet: bool,
+             max_steps: int | None) -> None:
     """Integrate the Newton-Euler equations of the one body in SCENE (YAML, SI units)."""
     interrupted = []
 
     def run() -> None:
-        from massprops.dynamics._jit import start_numba_lean
+        from massprops.dynamics.compiling import whole_process
         from massprops.dynamics.scene import load_scene
         from massprops.dynamics.simulate import simulate as run_scene
-        from massprops.errors import DivergenceError
+        from massprops.errors import DivergenceError, RunBudgetError
 
         if plot_path:
             from massprops.dynamics.plots import require_matplotlib
@@ -600,11 +613,12 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             sampling = scene.time.duration / 1000
         protect = [scene_path, *scene.input_files]
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
-        start_numba_lean()
+        whole_process()
         try:
             result = run_scene(scene, integrator=integrator, rtol=rtol, step=step,
-                               every=sampling, progress=progress)
-        except DivergenceError as exc:  # keep what was computed, then fail with exit 3
+                               every=sampling, progress=progress, notice=_say_note,
+                               max_steps=max_steps)
+        except (DivergenceError, RunBudgetError) as exc:  # keep what was computed, exit 3
             if out and exc.partial is not None:
                 _save(exc.partial, out, None, force, protect)
             raise
@@ -645,7 +659,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
     measured against the exact solution or a much tighter, checked reference run."""
 
     def run() -> None:
-        from massprops.dynamics._jit import start_numba_lean
+        from massprops.dynamics.compiling import whole_process
         from massprops.dynamics.precision import precision as run_ladders
         from massprops.dynamics.scene import load_scene
 
@@ -655,10 +669,10 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
             require_matplotlib()
         scene = load_scene(scene_path)
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
-        start_numba_lean()
+        whole_process()
         try:
             report = run_ladders(scene, integrators=[i for i in integrators if i != "auto"],
-                                 progress=progress)
+                                 progress=progress, notice=_say_note)
         finally:
             progress.close()
         if plot_path:

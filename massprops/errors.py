@@ -76,6 +76,16 @@ class DivergenceError(ComputationError):
         self.partial = partial
 
 
+class RunBudgetError(ComputationError):
+    """A run would need, or has taken, more steps or samples than the run bound allows
+    (massprops.dynamics.budget): refused up front, or stopped with ``partial`` holding what was
+    computed (a SimulationResult, or None when nothing ran)."""
+
+    def __init__(self, message: str, partial: object = None) -> None:
+        super().__init__(message)
+        self.partial = partial
+
+
 # --- exit 4: a check ran, and what was checked disagrees -----------------------------------------
 class CheckFailedError(MassPropsError):
     """A requested check ran on valid inputs and failed (``model --check``: a stated inertial

@@ -183,15 +183,20 @@ def print_precision(name: str, report) -> None:
                 "evals"):
         t.add_column(col, justify="left" if col == "integrator" else "right", no_wrap=True)
     previous = None
+    failed = []
     for r in report.runs:
         label = r.integrator if r.integrator != previous else ""
         previous = r.integrator
         setting = f"{r.setting:.3g}" if r.setting_name != "none" else ""
-        _row(t, label, setting, "—" if r.error is None else f"{r.wall_time_s:.2e}",
-                  "diverged" if r.error is None else f"{r.error:.2e}",
+        if r.reason is not None:
+            failed.append(f"{r.integrator} {setting}: {r.reason}")
+        _row(t, label, setting, "—" if r.wall_time_s is None else f"{r.wall_time_s:.2e}",
+                  f"failed ({len(failed)})" if r.error is None else f"{r.error:.2e}",
                   "—" if r.estimate is None else f"{r.estimate:.2e}", str(r.steps),
                   str(r.evaluations))
     _console.print(t)
+    for k, why in enumerate(failed, 1):
+        _console.print(Text(f"({k}) {why}"))
     acc = ref.get("accuracy")
     _console.print(f"reference: {ref['kind']} ({ref['checked']}); its accuracy ~ "
                    f"{acc:.1e}" if acc is not None else f"reference: {ref['kind']}")

@@ -90,12 +90,12 @@ def test_ctrl_c_while_waiting_for_the_companion_keeps_the_result(monkeypatch):
     real = sim.run_once
     main_done, pressed = threading.Event(), threading.Event()
 
-    def run_once(scene, program, spec, setting, t_out, progress=None):
+    def run_once(scene, program, spec, setting, t_out, progress=None, max_steps=None):
         if setting != 1e-8:  # the companion: hold it until Ctrl-C was pressed while waiting
             main_done.wait(30)  # bounded: a broken hand-off fails the test, never hangs it
             pressed.wait(30)
-            return real(scene, program, spec, setting, t_out, progress)
-        out = real(scene, program, spec, setting, t_out, progress)
+            return real(scene, program, spec, setting, t_out, progress, max_steps)
+        out = real(scene, program, spec, setting, t_out, progress, max_steps)
         main_done.set()
         return out
 
@@ -118,7 +118,7 @@ def test_ctrl_c_while_the_kernel_loads_does_not_wait_for_the_companion(monkeypat
     companion, busy compiling too, is only told to stop."""
     release, finished = threading.Event(), threading.Event()
 
-    def run_once(scene, program, spec, setting, t_out, progress=None):
+    def run_once(scene, program, spec, setting, t_out, progress=None, max_steps=None):
         if setting == 1e-8:  # the main run, interrupted in its warm-up
             raise KeyboardInterrupt
         release.wait(30)  # the companion, still compiling

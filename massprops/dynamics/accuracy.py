@@ -51,8 +51,9 @@ class Scales:
 
     @classmethod
     def of(cls, size: float, traj, duration: float) -> Scales:
-        w = float(np.max(np.linalg.norm(traj.angular_velocity, axis=1)))
-        v = float(np.max(np.linalg.norm(traj.velocity, axis=1)))
+        with np.errstate(over="ignore"):  # a run-away trajectory: inf scales, errors then 0/inf
+            w = float(np.max(np.linalg.norm(traj.angular_velocity, axis=1)))
+            v = float(np.max(np.linalg.norm(traj.velocity, axis=1)))
         v_scale = max(v, size * w, size / duration)
         return cls(size, v_scale, max(w, 1.0 / duration))
 
@@ -109,7 +110,8 @@ def global_estimate(kind: str, order: int, d_run: float, d_companions: float | N
 def exact_roundoff(traj, scales: Scales) -> float:
     """Round-off bound of the closed-form solution over ``traj`` (see the module doc)."""
     eps = float(np.finfo(float).eps)
-    turned = float(np.max(np.linalg.norm(traj.angular_velocity, axis=1))) * float(traj.t[-1])
-    reach = float(np.max(np.linalg.norm(traj.position, axis=1))) / scales.size
+    with np.errstate(over="ignore"):
+        turned = float(np.max(np.linalg.norm(traj.angular_velocity, axis=1))) * float(traj.t[-1])
+        reach = float(np.max(np.linalg.norm(traj.position, axis=1))) / scales.size
     return EXACT_ROUNDOFF * eps * (1.0 + turned) + 4 * eps * (1.0 + reach)
 

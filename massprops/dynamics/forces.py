@@ -18,7 +18,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from massprops.dynamics.model import Drag, Gravity, PointForce, RigidBody, Scene, Spring, Torque
 
@@ -155,8 +154,8 @@ def compile_forces(scene: Scene) -> ForceProgram:
         has_torque=has_torque, translation_closed_form=closed_form, stiffest_rate=rate)
 
 
-# --- compiled kernels --------------------------------------------------------------------------
-@njit(cache=True, inline="always")
+# --- the right-hand side: plain Python that compiled kernels compile where they call it ----------
+# (massprops.dynamics._jit registers these three with numba; this module imports no numba)
 def quat_matrix(q0, q1, q2, q3):
     """Rotation matrix entries (row-major 9-tuple) of the unit quaternion [q0, q1, q2, q3]."""
     return (1 - 2 * (q2 * q2 + q3 * q3), 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2),
@@ -164,7 +163,6 @@ def quat_matrix(q0, q1, q2, q3):
             2 * (q1 * q3 - q0 * q2), 2 * (q2 * q3 + q0 * q1), 1 - 2 * (q1 * q1 + q2 * q2))
 
 
-@njit(cache=True)
 def force_torque(y, o, active, codes, params):
     """Total force (world, N) and torque (principal, N·m): a 6-tuple (fx, fy, fz, nx, ny, nz).
 
@@ -259,7 +257,6 @@ def force_torque(y, o, active, codes, params):
     return fx, fy, fz, nx, ny, nz
 
 
-@njit(cache=True)
 def rhs(y, active, codes, params, mass, inertia, rot_only, ydot):
     """ẏ of the Newton-Euler equations for either state layout (see module doc); writes ``ydot``.
 
@@ -323,4 +320,4 @@ def _matrices(q: np.ndarray) -> np.ndarray:
 
 def quat_matrix_np(q: np.ndarray) -> tuple[np.ndarray, ...]:
     """Vectorised `quat_matrix`: nine (n,) arrays, row-major."""
-    return quat_matrix.py_func(q[:, 0], q[:, 1], q[:, 2], q[:, 3])
+    return quat_matrix(q[:, 0], q[:, 1], q[:, 2], q[:, 3])

@@ -16,12 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.dynamics.accuracy import Scales, exact_roundoff, global_estimate, state_error
+from massprops.dynamics.compiling import prepare
 from massprops.dynamics.forces import ForceProgram, compile_forces
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.model import Scene
 from massprops.dynamics.runner import run_once
 from massprops.dynamics.simulate import choose_integrator, default_step, simulate
-from massprops.errors import ComputationError, DivergenceError, UsageError
+from massprops.errors import ComputationError, MassPropsError, UsageError
 
 RTOL_LADDER = tuple(10.0**-k for k in range(3, 13))
 """Adaptive settings, loose to tight; the reference runs at 1e-13 (see `reference_run`)."""
@@ -49,23 +50,26 @@ MIN_TIMED_S = 0.2
 
 @dataclass(frozen=True)
 class PrecisionRun:
-    """One rung of a ladder. error and estimate are in the contract's metric; None = diverged
-    (error) or unavailable (estimate)."""
+    """One rung of a ladder. error and estimate are in the contract's metric; None = the run
+    failed or its error could not be measured (error: ``reason`` says why) or unavailable
+    (estimate). A failed rung is a row like any other: wall_time_s, steps and evaluations are
+    what it spent until it stopped (wall_time_s None when it never started)."""
 
     integrator: str
     setting: float
     setting_name: str
-    wall_time_s: float
+    wall_time_s: float | None
     error: float | None
     estimate: float | None
     steps: int
     evaluations: int
+    reason: str | None = None
 
     def as_dict(self) -> dict:
         return {"integrator": self.integrator, "setting": self.setting,
                 "setting_name": self.setting_name, "wall_time_s": self.wall_time_s,
                 "error": self.error, "error_estimate": self.estimate, "steps": self.steps,
-                "evaluations": self.evaluations}
+                "evaluations": self.evaluations, "reason": self.reason}
 
 
 @dataclass(frozen=True)
@@ -99,8 +103,12 @@ def ladder(spec, scene: Scene, program: ForceProgram) -> list[float]:
 
 
 def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
-              progress: Callable[[float], None] | None = None) -> PrecisionReport:
-    """Run the ladders of ``integrators`` (default: every applicable one) on ``scene``."""
+              progress: Callable[[float], None] | None = None,
+              notice: Callable[[str], None] | None = None) -> PrecisionReport:
+    """Run the ladders of ``integrators`` (default: every applicable one) on ``scene``.
+
+    notice(text) is called once if compiled kernels are missing from numba's cache and are being
+    compiled (all of them are made ready first: massprops.dynamics.compiling.prepare)."""
     from massprops.dynamics.integrators import INTEGRATORS
 
     program = compile_forces(scene)
@@ -112,6 +120,8 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
                              f"to this scene; applicable: {', '.join(names)}")
         names = [n for n in names if n in integrators]
     t_out = np.linspace(0.0, scene.time.duration, SAMPLES + 1)
+    prepare([*names, reference_method(scene, program, INTEGRATORS),
+             *(["dop853"] if any(INTEGRATORS[n].stiff for n in names) else [])], notice)
     truth, reference = reference_run(scene, program, INTEGRATORS, t_out)
     scales = Scales.of(scene.body.size, truth, scene.time.duration)
     plan = [(n, s) for n in names for s in ladder(INTEGRATORS[n], scene, program)]
@@ -121,11 +131,19 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
         if name not in done:
             run = _rung(scene, program, INTEGRATORS[name], setting, t_out, truth, scales)
             runs.append(run)
-            if (run.error is not None and run.error <= floor) or run.wall_time_s > MAX_RUN_S:
+            if ((run.error is not None and run.error <= floor)
+                    or (run.wall_time_s or 0.0) > MAX_RUN_S):
                 done.add(name)
         if progress is not None:
             progress((i + 1) / len(plan))
     return PrecisionReport(reference, tuple(runs))
+
+
+def reference_method(scene: Scene, program: ForceProgram, registry: Mapping) -> str:
+    """The integrator of `reference_run`: exact, implicit (stiff scenes) or dop853."""
+    if "exact" in applicable(scene, program, registry):
+        return "exact"
+    return "implicit" if choose_integrator(scene, program, registry)[0] == "implicit" else "dop853"
 
 
 def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out: np.ndarray):
@@ -136,14 +154,14 @@ def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out:
     scenes, the implicit method at a step 4× finer than its finest rung checked against twice
     that step by Richardson's rule.
     """
-    if "exact" in applicable(scene, program, registry):
+    method = reference_method(scene, program, registry)
+    if method == "exact":
         truth = _trajectory(scene, program, registry["exact"], 0.0, t_out)
         scales = Scales.of(scene.body.size, truth, scene.time.duration)
         return truth, {"kind": "exact", "integrator": "exact", "setting": None,
                        "accuracy": exact_roundoff(truth, scales),
                        "checked": "closed form; accuracy is its round-off bound"}
-    stiff = choose_integrator(scene, program, registry)[0] == "implicit"
-    if stiff:
+    if method == "implicit":
         spec = registry["implicit"]
         fine = ladder(spec, scene, program)[-1] / 4
         truth, check, coarse = (_trajectory(scene, program, spec, k * fine, t_out)
@@ -175,12 +193,19 @@ def _rung(scene, program, spec, setting, t_out, truth, scales) -> PrecisionRun:
     name = {"adaptive": "rtol", "fixed": "step_s"}.get(spec.kind, "none")
     try:
         result = simulate(scene, integrator=spec.name, rtol=setting, step=setting, every=every)
-    except DivergenceError:
-        return PrecisionRun(spec.name, setting, name, math.nan, None, None, 0, 0)
+    except MassPropsError as exc:  # diverged, out of budget, a setting the method refuses
+        part = getattr(exc, "partial", None)
+        why = str(exc).removeprefix(f"{scene.source}: ")
+        if part is None:
+            return PrecisionRun(spec.name, setting, name, None, None, None, 0, 0, why)
+        return PrecisionRun(spec.name, setting, name, part.wall_time_s, None, None, part.steps,
+                            part.evaluations, why)
     error = state_error(result.trajectory, truth, scales)
     wall, spent, tries = result.wall_time_s, result.wall_time_s, 1
     while spent < MIN_TIMED_S and tries < 5:  # best of repeats: only the main run is timed
         again = run_once(scene, program, spec, setting, t_out)
         wall, spent, tries = min(wall, again.wall), spent + again.wall, tries + 1
-    return PrecisionRun(spec.name, setting, name, wall, error if math.isfinite(error) else None,
-                        result.diagnostics["error_estimate"], result.steps, result.evaluations)
+    measured = math.isfinite(error)
+    return PrecisionRun(spec.name, setting, name, wall, error if measured else None,
+                        result.diagnostics["error_estimate"], result.steps, result.evaluations,
+                        None if measured else "its state ran away: the error overflows")

@@ -14,17 +14,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from massprops.dynamics import budget
 from massprops.dynamics.forces import ForceProgram
 from massprops.dynamics.frames import initial_principal_state
+from massprops.dynamics.integrators.base import STATUS_STEP_LIMIT
 from massprops.dynamics.model import Scene
+from massprops.errors import ComputationError
 
 CHUNK_STEPS = 50_000
 """Steps per compiled call (~0.05 s): between calls Ctrl-C and the progress bar are served.
 Chunks are sized by step counts, never by timers, so results do not depend on the machine."""
 
 FIRST_CHUNK = 1 / 32
-"""An adaptive run's first call covers this fraction of the run; later ones grow or shrink
-(at most ×16, at least ×½) toward CHUNK_STEPS steps, from the steps the previous call took."""
+"""An adaptive run's first call covers this fraction of the run, or CHUNK_STEPS steps of
+FIRST_STEP_RAD at the fastest rate of the start (spin, stiffest term), if that is shorter; later
+ones grow or shrink (at most ×16, at least ×½) toward CHUNK_STEPS steps, from the steps the
+previous call took. The rate cap keeps a first call of a fast-spinning, long run from taking
+hours before the run bound (budget.py) is first checked."""
+
+FIRST_STEP_RAD = 0.1
+"""Angle per step of the fastest rate assumed for sizing an adaptive run's first call."""
 
 
 def scale_floors(scene: Scene) -> np.ndarray:
@@ -36,10 +45,12 @@ def scale_floors(scene: Scene) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class RawRun:
-    """One integration in the principal frame: samples t (n,), y (n, 13) up to where it got,
-    stats [steps, nfev, rejected, njev, status], wall and warm-up seconds, failure message, and
-    short_err: the kernels' own local error estimates (absolute, max-norm over the state) summed
-    over the fixed-step segments of one or two steps, which a 2h companion run cannot see."""
+    """One integration in the principal frame: samples t (n,), y (n, 13) up to where it got
+    (every row finite, its quaternion a rotation: see `run_once`), stats [steps, nfev, rejected,
+    njev, status], wall and warm-up seconds, failure message, and short_err: the kernels' own
+    local error estimates (absolute, max-norm over the state) summed over the fixed-step
+    segments of one or two steps, which a 2h companion run cannot see. ``exhausted``: the
+    failure is the run bound (massprops.dynamics.budget), not a divergence."""
 
     t: np.ndarray
     y: np.ndarray
@@ -49,20 +60,47 @@ class RawRun:
     failure: str | None
     interrupted: bool
     short_err: float = 0.0
+    exhausted: bool = False
 
 
 def run_once(scene: Scene, program: ForceProgram, spec, setting: float, t_out: np.ndarray,
-             progress: Callable[[float], None] | None = None) -> RawRun:
-    """Integrate ``scene`` once with ``spec`` at ``setting``, sampled at ``t_out``."""
+             progress: Callable[[float], None] | None = None,
+             max_steps: int | None = None) -> RawRun:
+    """Integrate ``scene`` once with ``spec`` at ``setting``, sampled at ``t_out``; a run that
+    reaches ``max_steps`` (default budget.MAX_STEPS) stops there (``exhausted``)."""
     runner = _Runner(spec, program, setting, progress, scene.time.duration,
                      scale_floors(scene))
+    runner.max_steps = max_steps
     y_out, t_reached, interrupted = runner.run(initial_principal_state(scene), t_out)
     keep = t_out <= t_reached
     t_kept, y_kept = t_out[keep], y_out[keep]
     if t_kept[-1] < t_reached:  # interrupted or failed between samples: keep the last state
         t_kept, y_kept = np.append(t_kept, t_reached), np.vstack([y_kept, runner.y_last])
-    return RawRun(t_kept, y_kept, runner.stats, runner.wall, runner.warmup, runner.failure,
-                  interrupted, runner.short_err)
+    failure = runner.failure
+    bad = unusable_rows(y_kept)
+    if bad.any():  # no kernel should let one through; never hand it on as a state
+        first = int(np.argmax(bad))
+        if first == 0:
+            raise ComputationError(f"{spec.name}: the initial state is not finite: {y_kept[0]}")
+        failure = failure or (f"{spec.name} diverged at t = {t_kept[first]:.6g} s: the state "
+                              "became NaN, infinite or no rotation; "
+                              + stability_hint(program, setting, spec.name))
+        t_kept, y_kept = t_kept[:first], y_kept[:first]
+    return RawRun(t_kept, y_kept, runner.stats, runner.wall, runner.warmup, failure,
+                  interrupted, runner.short_err, runner.exhausted)
+
+
+QUATERNION_NORM_ATOL = 0.5
+"""A sample whose quaternion norm is this far from 1 is no rotation: the kernels keep it within
+round-off of 1, so only a diverged state gets there."""
+
+
+def unusable_rows(y: np.ndarray) -> np.ndarray:
+    """(n,) bool: rows of principal-frame states (n, 13) that are not finite or whose quaternion
+    is no rotation (norm far from 1)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        norm = np.sqrt(np.sum(y[:, 6:10] ** 2, axis=1))
+        return ~np.isfinite(y).all(axis=1) | ~(np.abs(norm - 1.0) <= QUATERNION_NORM_ATOL)
 
 
 def stability_hint(program: ForceProgram, setting: float, name: str) -> str:
@@ -76,6 +114,19 @@ def stability_hint(program: ForceProgram, setting: float, name: str) -> str:
     return "try a smaller step or tolerance"
 
 
+def budget_advice(spec, program: ForceProgram) -> str:
+    """What to change when a run of ``spec`` needs more steps than the run bound."""
+    what = ("loosen time.rtol (or --rtol)" if spec.kind == "adaptive"
+            else "raise time.step (or --step)")
+    advice = f"{what} or shorten time.duration"
+    if program.stiffest_rate > 0 and not spec.stiff:
+        advice += (f"; the stiffest term has rate {program.stiffest_rate:.3g}/s: integrator "
+                   "implicit steps over it")
+    if not program.has_torque and program.translation_closed_form:
+        advice += "; the scene is torque-free: integrator exact takes no steps"
+    return advice
+
+
 class _Runner:
     """Walks the segments between window edges in chunks, filling the samples."""
 
@@ -86,12 +137,16 @@ class _Runner:
         self.stats = np.zeros(5, dtype=np.int64)
         self.wall, self.warmup = 0.0, 0.0
         self.failure: str | None = None
+        self.exhausted = False
+        self.spin = 0.0
+        self.max_steps: int | None = None
         self.y_last = None
         self.t_now = 0.0
         self.short_err = 0.0
 
     def run(self, y0: np.ndarray, t_out: np.ndarray):
         p = self.program
+        self.spin = float(np.linalg.norm(y0[10:13]))
         rot_only = p.translation_closed_form
         y_full = y0.copy()
         y_out = np.full((len(t_out), 13), np.nan)
@@ -117,7 +172,8 @@ class _Runner:
         start = time.perf_counter()
         y = (y0[6:] if rot_only else y0).copy()
         self.spec.run_segment(y, 0.0, 1e-9, self.setting if self.setting else 1e-9,
-                              (p.active(0.0), p.codes, p.params, p.mass, p.inertia, self.floors),
+                              (p.active(0.0), p.codes, p.params, p.mass, p.inertia, self.floors,
+                               budget.MAX_STEPS),
                               rot_only, np.empty(0), np.empty((0, y.size)),
                               np.zeros(5, dtype=np.int64))
         self.warmup = time.perf_counter() - start
@@ -130,7 +186,8 @@ class _Runner:
         sel = np.flatnonzero((t_out >= t0) & (t_out <= t1) if first else
                              (t_out > t0) & (t_out <= t1))
         accel = p.constant_force(active) / p.mass if rot_only else None
-        arrays = (active, p.codes, p.params, p.mass, p.inertia, self.floors)
+        arrays = (active, p.codes, p.params, p.mass, p.inertia, self.floors,
+                  self.max_steps or budget.MAX_STEPS)
         # a segment of one or two steps (a force window shorter than the step) is stepped the
         # same way by a 2h companion, so its error is invisible to Richardson: keep the kernel's
         # own local estimate of it
@@ -162,8 +219,20 @@ class _Runner:
             self.t_now = t_reached
             if short:
                 self.short_err += err
+            if self.stats[4] == STATUS_STEP_LIMIT:  # the run bound, inside a call
+                self.failure = (f"{self.spec.name} stopped at t = {t_reached:.6g} s: it has "
+                                f"taken {int(self.stats[0]):.3g} steps, the run bound "
+                                "(--max-steps); " + budget_advice(self.spec, self.program))
+                self.exhausted = True
+                return
             if self.stats[4] != 0 or t_reached < t_end:  # NaN, underflow, or stopped early
                 self.failure = self._failure_message(t_reached)
+                return
+            why = budget.exhausted(int(self.stats[0]), t_end / self.duration, self.max_steps)
+            if why is not None:
+                self.failure = (f"{self.spec.name} stopped at t = {t_end:.6g} s: {why}; "
+                                + budget_advice(self.spec, self.program))
+                self.exhausted = True
                 return
             if self.progress is not None:
                 self.progress(t_end / self.duration)
@@ -176,6 +245,9 @@ class _Runner:
             return t1 - t0
         if self.spec.kind == "fixed":
             return CHUNK_STEPS * self.setting
+        rate = max(self.spin, self.program.stiffest_rate)
+        if rate > 0.0:
+            return min(FIRST_CHUNK * self.duration, CHUNK_STEPS * FIRST_STEP_RAD / rate)
         return FIRST_CHUNK * self.duration
 
     def _chunk_end(self, t: float, t0: float, t1: float, length: float) -> float:

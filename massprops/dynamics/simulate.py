@@ -17,6 +17,8 @@ from massprops.dynamics.accuracy import (
     global_estimate,
     state_error,
 )
+from massprops.dynamics.budget import check_fixed_steps, check_samples
+from massprops.dynamics.compiling import prepare
 from massprops.dynamics.forces import (
     DRAG,
     FORCE_BODY,
@@ -32,7 +34,7 @@ from massprops.dynamics.frames import Trajectory, to_world
 from massprops.dynamics.model import Scene
 from massprops.dynamics.runner import RawRun, run_once, stability_hint
 from massprops.dynamics.stiffness import unresolved, unresolved_mode_error
-from massprops.errors import DivergenceError, UsageError
+from massprops.errors import DivergenceError, RunBudgetError, UsageError
 from massprops.parallel import CancellableJob
 
 STEP_BUDGET = 2_000_000
@@ -110,11 +112,12 @@ DIAGNOSTIC_SAMPLES = 100
 cheap) so that drifts are maxima over the run and a divergence is located in time."""
 
 
-def sample_times(duration: float, every: float | None) -> np.ndarray:
-    """Output times: k·every below the duration, and the duration itself (never accumulated)."""
+def sample_times(duration: float, every: float | None, source: str = "") -> np.ndarray:
+    """Output times: k·every below the duration, and the duration itself (never accumulated).
+    Raises RunBudgetError when there would be more than budget.MAX_SAMPLES."""
     if every is None:
         return np.linspace(0.0, duration, DIAGNOSTIC_SAMPLES + 1)
-    n = int(math.floor(duration / every * (1 + 1e-12)))
+    n = check_samples(duration, every, source)
     t = every * np.arange(n + 1)
     return t if t[-1] >= duration * (1 - 1e-12) else np.append(t, duration)
 
@@ -122,14 +125,20 @@ def sample_times(duration: float, every: float | None) -> np.ndarray:
 # --- the run -----------------------------------------------------------------------------------
 def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None = None,
              step: float | None = None, every: float | None = None,
-             progress: Callable[[float], None] | None = None) -> SimulationResult:
+             progress: Callable[[float], None] | None = None,
+             notice: Callable[[str], None] | None = None,
+             max_steps: int | None = None) -> SimulationResult:
     """Integrate ``scene``; options override the scene's time/output settings.
 
     progress(fraction) is called between compiled chunks of the main run, and while waiting for
     the error estimate's companion runs (on a helper thread, see `_start_companions`), always on
-    the calling thread. Ctrl-C during the run returns the samples computed so far with
-    ``interrupted=True`` (the caller exits 130).
-    Raises DivergenceError (exit 3) naming the time and the likely cause.
+    the calling thread. notice(text) is called once, on the calling thread, if the run's
+    compiled kernels are not in numba's cache and are being compiled (massprops.dynamics
+    .compiling.prepare). Ctrl-C during the run returns the samples computed so far with
+    ``interrupted=True`` (the caller exits 130). ``max_steps`` bounds every run of the call
+    (default budget.MAX_STEPS; see massprops.dynamics.budget).
+    Raises DivergenceError (exit 3) naming the time and the likely cause, RunBudgetError (exit 3)
+    when the run bound refuses or stops the run (both carry what was computed).
     """
     from massprops.dynamics.integrators import INTEGRATORS
 
@@ -149,12 +158,18 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
                          "and the heavy symmetric top on a fixed point; use auto, dop853 or a "
                          "splitting method")
     duration = scene.time.duration
-    t_out = sample_times(duration, every if every is not None else scene.output.every)
+    t_out = sample_times(duration, every if every is not None else scene.output.every,
+                         str(scene.source))
     setting = _setting(spec, scene, program, rtol, step)
-    side = _start_companions(scene, program, spec, setting, t_out)
+    if spec.kind == "fixed":  # the run bound: refused before anything is compiled or run
+        check_fixed_steps(name, duration, setting, len(program.breakpoints(0.0, duration)),
+                          str(scene.source), max_steps)
+    prepare(kernels_needed(spec, setting, program), notice)
+    side = _start_companions(scene, program, spec, setting, t_out, max_steps)
     wait = True
     try:
-        return _run_and_check(scene, program, spec, name, reason, setting, t_out, progress, side)
+        return _run_and_check(scene, program, spec, name, reason, setting, t_out, progress, side,
+                              max_steps)
     except KeyboardInterrupt:  # Ctrl-C while the kernel compiles or loads, before the run's
         wait = False  # chunks: leave now; the helper stops at its first report (a compile later)
         raise
@@ -165,12 +180,19 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
             side.cancel()
 
 
+def kernels_needed(spec, setting: float, program: ForceProgram) -> list[str]:
+    """The integrators whose compiled kernels a run of ``spec`` at ``setting`` calls: its own,
+    and dop853 when the stiffness probe will run (stiffness.unresolved)."""
+    return [spec.name, *(["dop853"] if unresolved(spec, setting, program) else [])]
+
+
 def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
-                   side: CancellableJob | None) -> SimulationResult:
+                   side: CancellableJob | None, max_steps: int | None = None
+                   ) -> SimulationResult:
     """The main run, its diagnostics and divergence checks, then the error estimate from the
     companion runs of ``side`` (running meanwhile on another thread; None for closed forms)."""
     main_progress = None if progress is None else _joint_progress(progress, side)
-    run = run_once(scene, program, spec, setting, t_out, main_progress)
+    run = run_once(scene, program, spec, setting, t_out, main_progress, max_steps)
     conservative = is_conservative(program)
     traj = to_world(scene, run.t, run.y, program, with_energy=conservative
                     or cannot_gain_energy(program))
@@ -188,6 +210,8 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
             f"{scene.source}: {name} diverged near t = {onset:.6g} s: the energy grew by more "
             f"than {ENERGY_BLOWUP:.0e} times its initial value{later}; "
             + stability_hint(program, setting, name), partial=result)
+    if run.failure is not None and run.exhausted:
+        raise RunBudgetError(f"{scene.source}: {run.failure}", partial=result)
     if run.failure is not None:
         raise DivergenceError(f"{scene.source}: {run.failure}", partial=result)
     if not run.interrupted:
@@ -199,7 +223,8 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
 
 # --- the error-estimate companions, beside the main run -----------------------------------------
 def _start_companions(scene: Scene, program: ForceProgram, spec, setting: float,
-                      t_out: np.ndarray) -> CancellableJob | None:
+                      t_out: np.ndarray, max_steps: int | None = None
+                      ) -> CancellableJob | None:
     """The companion runs of the error estimate (accuracy.companion_settings), one after the
     other on a helper thread, or None for a method that needs none. They run while the main run
     does: the kernels release the GIL (_jit.kernel), so on two cores the estimate adds little
@@ -216,7 +241,7 @@ def _start_companions(scene: Scene, program: ForceProgram, spec, setting: float,
             def part(fraction: float, k: int = k) -> None:  # of all companions together
                 report((k + fraction) / len(settings))
 
-            runs.append(run_once(scene, program, spec, other, t_out, part))
+            runs.append(run_once(scene, program, spec, other, t_out, part, max_steps))
             if runs[-1].interrupted or runs[-1].failure is not None:
                 break  # the next companion could add nothing
         return runs
@@ -326,6 +351,13 @@ def _energy_blowup(traj: Trajectory, floor: float = 0.0) -> float | None:
 
 def _diagnostics(program: ForceProgram, y: np.ndarray, traj: Trajectory, conservative: bool,
                  floor: float = 0.0) -> dict:
+    with np.errstate(over="ignore", invalid="ignore"):  # a run-away state: inf, reported null
+        return {key: value if value is None or math.isfinite(value) else None
+                for key, value in _drifts(program, y, traj, conservative, floor).items()}
+
+
+def _drifts(program: ForceProgram, y: np.ndarray, traj: Trajectory, conservative: bool,
+            floor: float = 0.0) -> dict:
     qn = np.abs(np.linalg.norm(y[:, 6:10], axis=1) - 1.0)
     out = {"energy_rel_drift": None, "angular_momentum_rel_drift": None,
            "quaternion_norm_error": float(qn.max()), "error_estimate": None,

@@ -25,8 +25,11 @@ with one ``SPEC`` and one entry in ``_BUILT_IN`` below, or calls `register`):
    the quaternion: each block's error is relative to that block's own size, so a component
    passing through zero needs no extra care.
 4. ``program_arrays`` : (active (k,) bool, codes (k,) int64, params (k, NPAR) float64, mass kg,
-   inertia (3,) kg·m²), from ``ForceProgram`` and ``ForceProgram.active``; the kernels call
-   ``forces.rhs`` with them and never look inside.
+   inertia (3,) kg·m²[, floors (4,), max_steps int]), from ``ForceProgram`` and
+   ``ForceProgram.active``; the kernels call ``forces.rhs`` with them and never look inside.
+   The optional sixth and seventh entries are for error-scaled kernels (``segment_runner(...,
+   scaled=True)``): the error-scale floors, and the step limit (the run bound,
+   massprops.dynamics.budget): such a kernel stops with status 3 once stats[STEPS] reaches it.
 5. ``t_out`` : (n_out,) float64 sorted times within [t0, t1]; ``y_out`` : (n_out, ny) float64,
    filled with the state at those times by dense output, not the nearest step: DOP853's own 7th
    order interpolant, Radau's collocation polynomial, a cubic Hermite interpolant from the step
@@ -34,13 +37,17 @@ with one ``SPEC`` and one entry in ``_BUILT_IN`` below, or calls `register`):
    re-normalised. Rows after ``t_reached`` are NaN.
 6. ``stats`` : (5,) int64 [steps, nfev, rejected, njev, status], accumulated (+=); status is set
    to 1 if a NaN/inf appeared (the step is abandoned, the state is the last finite one), 2 if the
-   step fell below 1e-14 × max(|t|, t1 - t0) (stiffness or a singularity). Callers check
-   status (and ``t_reached < t1``) after every call.
+   step fell below 1e-14 × max(|t|, t1 - t0) (stiffness or a singularity), 3 if the step limit
+   of item 4 was reached (the state is valid at ``t_reached``). A quaternion whose norm is zero
+   or not finite counts as NaN (``_shared.project_quaternion``). Callers check status (and
+   ``t_reached < t1``) after every call.
 7. ``err`` : float, the segment's accumulated local error estimate: max-norm in absolute units of
    the state, summed over the steps. Each module's docstring says how it is estimated. The
    global error estimate is the caller's job. On failure it covers the steps taken (possibly 0).
-8. All stepping happens inside one numba-compiled function per method (``@njit(cache=True)``):
-   one Python call per segment, never per step; work arrays are allocated once per segment.
+8. All stepping happens inside one numba-compiled function per method (``_jit.kernel``): one
+   Python call per segment, never per step; work arrays are allocated once per segment. No
+   array-to-slice assignment in compiled code (``_shared.copy_into``): it compiles numba's
+   shape-error message machinery, seconds of every first compile.
 9. ``run_segment`` checks its arguments (once per segment) and raises
    `massprops.errors.UsageError` naming the integrator, what was expected and what came.
 
@@ -57,8 +64,9 @@ not depend on t; simulate offers it only for torque-free scenes with constant fo
 Caching: numba's on-disk cache is keyed on each kernel's own source file only; importing
 ``massprops.dynamics`` therefore points it at a folder named by a hash of all the dynamics
 sources, so an edit or upgrade of a file a kernel calls into recompiles instead of running stale
-code. A fresh machine compiles the kernels once (~20 s CPU); later runs load them in well under
-a second.
+code. A fresh machine compiles a method's kernel once, on first use (2-10 s of one core;
+``massprops.dynamics.compiling`` gets them ready before a run and says so); later runs load them
+in well under a second.
 """
 
 from __future__ import annotations

@@ -6,12 +6,11 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from massprops.dynamics._jit import inner
+from massprops.dynamics.integrators._shared import EPS, copy_into, f
 
-from massprops.dynamics.integrators._shared import EPS, f
 
-
-@njit(cache=True)
+@inner
 def fd_jacobian(y, f0, prog, jac, ytmp, ftmp):
     """jac (n, n) := ∂ẏ/∂y at y by forward differences, f0 = ẏ(y) given; n evaluations.
 
@@ -19,7 +18,7 @@ def fd_jacobian(y, f0, prog, jac, ytmp, ftmp):
     rounded so that y_j + δ - y_j is exactly δ.
     """
     n = y.shape[0]
-    ytmp[:] = y
+    copy_into(y, ytmp)
     for j in range(n):
         yj = y[j]
         d = math.sqrt(EPS * max(1e-5, abs(yj)))
@@ -31,7 +30,7 @@ def fd_jacobian(y, f0, prog, jac, ytmp, ftmp):
         ytmp[j] = yj
 
 
-@njit(cache=True)
+@inner
 def lu_factor(a, piv):
     """Factor the square matrix a in place (P a = L U, unit L below the diagonal, U on and above
     it); piv (m,) int64 records the row swaps. Returns False if a pivot is zero or not finite."""
@@ -59,7 +58,7 @@ def lu_factor(a, piv):
     return True
 
 
-@njit(cache=True)
+@inner
 def lu_solve(a, piv, b):
     """Solve in place for b (m,) with the factors of `lu_factor`."""
     m = a.shape[0]
@@ -91,13 +90,13 @@ ROUNDOFF = 1e-14
 CONVERGED, DIVERGED, NONFINITE, GOING = 0, 1, 2, 3
 
 
-@njit(cache=True)
+@inner
 def first_eta(eta_prev):
     """η for the first iteration's test, from the last step's rate (Hairer's max(η, eps)^0.8)."""
     return max(eta_prev, EPS) ** 0.8
 
 
-@njit(cache=True)
+@inner
 def verdict(it, dnorm, norm_old, eta):
     """After iteration ``it`` (0-based) with correction norm ``dnorm`` (previous ``norm_old``,
     inf if none): (CONVERGED | DIVERGED | GOING, rate θ, η = θ / (1 - θ))."""

@@ -17,16 +17,18 @@ import math
 import numpy as np
 from numba import njit
 
+from massprops.dynamics._jit import inner, jit
 from massprops.dynamics.exact import free_rotation_kernel
-from massprops.dynamics.forces import DRAG, JOINT, SPRING, force_torque
+from massprops.dynamics.forces import DRAG, JOINT, SPRING
 from massprops.dynamics.integrators._newton import lu_factor, lu_solve
+from massprops.dynamics.integrators._shared import ft
 
 SPRING_STIFFNESS, SPRING_DAMPING = 7, 9
 """Columns of a SPRING row of ``params`` (see forces.NPAR): k (N/m) and c (N·s/m)."""
 
 
 # --- the program split into its configuration part and its velocity part -----------------------
-@njit(cache=True)
+@jit
 def kick_program(active, codes, params, mass, inertia, o):
     """The force program split for the kick, once per segment. Returns the tuple
     (codes, active_c, params_c, active_d, params_d, mass, inertia, o, has_c, has_d, has_any):
@@ -66,7 +68,7 @@ def kick_program(active, codes, params, mass, inertia, o):
             has_any)
 
 
-@njit(cache=True)
+@jit
 def kick_work(n):
     """Scratch arrays of the kick for a state of length n: (ytmp (n,), b (nz, nz), a (nz, nz),
     piv (nz,) int64, rhs (nz,), z0 (nz,), fc (nz,)), nz = 6 (full) or 3 (rotation-only)."""
@@ -75,7 +77,7 @@ def kick_work(n):
             np.empty(nz), np.empty(nz), np.empty(nz))
 
 
-@njit(cache=True)
+@inner
 def z_index(i, o):
     """Index in the state of the kick variable z_i (v then ω' in the full layout, ω' only in the
     rotation-only one)."""
@@ -84,7 +86,7 @@ def z_index(i, o):
     return 4 + i
 
 
-@njit(cache=True)
+@inner
 def z_mass(i, mass, inertia, o):
     """The diagonal of M for z_i: m for a velocity component, J'_j for ω'_j."""
     if o == 6:
@@ -115,15 +117,15 @@ def kick(y, tau_a, tau_b, kp, wk):
 @njit(cache=True, inline="always")
 def exact_kick(y, tau, codes, active_c, params_c, mass, inertia, o):
     """z += tau M⁻¹ F_c(r, q): the exact flow of the configuration-dependent forces."""
-    ft = force_torque(y, o, active_c, codes, params_c)
+    f6 = ft(y, o, active_c, codes, params_c)
     if o == 6:
         for i in range(3):
-            y[3 + i] += tau * ft[i] / mass
+            y[3 + i] += tau * f6[i] / mass
     for i in range(3):
-        y[o + 4 + i] += tau * ft[3 + i] / inertia[i]
+        y[o + 4 + i] += tau * f6[3 + i] / inertia[i]
 
 
-@njit(cache=True)
+@inner
 def damped_kick(y, tau_a, tau_b, kp, wk):
     """The kicks of `kick` when a velocity-dependent term is active: F_c and B once at this
     configuration, then one implicit-midpoint step per nonzero length. Returns evaluations."""
@@ -133,12 +135,13 @@ def damped_kick(y, tau_a, tau_b, kp, wk):
     shift = 0 if o == 6 else 3
     nfev = 0
     if has_c:
-        ft = force_torque(y, o, active_c, codes, params_c)
+        f6 = ft(y, o, active_c, codes, params_c)
         nfev += 1
         for i in range(nz):
-            fc[i] = ft[i + shift]
+            fc[i] = f6[i + shift]
     else:
-        fc[:] = 0.0
+        for i in range(nz):
+            fc[i] = 0.0
     nfev += damping_matrix(y, kp, ytmp, b)
     for tau in (tau_a, tau_b):
         if tau != 0.0 and not midpoint_kick(y, tau, kp, b, a, piv, rhs, z0, fc):
@@ -148,7 +151,7 @@ def damped_kick(y, tau_a, tau_b, kp, wk):
     return nfev
 
 
-@njit(cache=True)
+@inner
 def damping_matrix(y, kp, ytmp, b):
     """b (nz, nz) := B, the velocity part's force per unit z at the configuration of y (exact:
     that force is linear in z). Returns the evaluations used (nz)."""
@@ -160,13 +163,13 @@ def damping_matrix(y, kp, ytmp, b):
     for j in range(nz):
         for i in range(nz):
             ytmp[z_index(i, o)] = 1.0 if i == j else 0.0
-        ft = force_torque(ytmp, o, active_d, codes, params_d)
+        f6 = ft(ytmp, o, active_d, codes, params_d)
         for i in range(nz):
-            b[i, j] = ft[i + shift]
+            b[i, j] = f6[i + shift]
     return nz
 
 
-@njit(cache=True)
+@inner
 def midpoint_kick(y, tau, kp, b, a, piv, rhs, z0, fc):
     """One implicit-midpoint step of M ż = F_c + B z over tau, in closed form:
     (M - tau/2 B) Δz = tau (F_c + B z0). False if that matrix is singular (a backward step,
@@ -191,7 +194,7 @@ def midpoint_kick(y, tau, kp, b, a, piv, rhs, z0, fc):
 
 
 # --- the drift ---------------------------------------------------------------------------------
-@njit(cache=True)
+@jit
 def drift_work():
     """Scratch arrays of the drift: (q0 (4,), w0 (3,), times (1,), out_q (1, 4), out_w (1, 3))."""
     return np.empty(4), np.empty(3), np.empty(1), np.empty((1, 4)), np.empty((1, 3))

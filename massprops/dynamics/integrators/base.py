@@ -17,9 +17,13 @@ STEPS, NFEV, REJECTED, NJEV, STATUS = range(5)
 """Indices into ``stats``: accepted steps, right-hand-side evaluations, rejected steps (adaptive
 error test or failed Newton iterations), Jacobian evaluations, status."""
 
-STATUS_OK, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW = 0, 1, 2
+STATUS_OK, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_STEP_LIMIT = 0, 1, 2, 3
 """``stats[STATUS]``: 0 fine; 1 a NaN/inf appeared (the state is the last finite one); 2 the step
-fell below round-off (1e-14 of the time scale): the problem is stiff or singular there."""
+fell below round-off (1e-14 of the time scale): the problem is stiff or singular there; 3 the
+caller's step limit was reached (the state is valid at t_reached: the run bound, budget.py)."""
+
+NO_STEP_LIMIT = 2**62
+"""The step limit of a scaled kernel when the caller gives none."""
 
 KINDS = ("fixed", "adaptive", "exact")
 
@@ -60,9 +64,11 @@ def segment_runner(name: str, kind: str, kernel, *, scaled: bool = False) -> Run
     per step), then hands everything to the compiled kernel.
 
     kernel(y, t0, t1, setting, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-    stats[, floors]) -> (err, t_reached), compiled with numba. ``scaled`` kernels measure errors
-    per block and take ``floors`` (4,): the smallest scale of the r, v, q, ω blocks, the optional
-    sixth entry of program_arrays (zeros when absent).
+    stats[, floors, max_steps]) -> (err, t_reached), compiled with numba. ``scaled`` kernels
+    measure errors per block and take ``floors`` (4,): the smallest scale of the r, v, q, ω
+    blocks, the optional sixth entry of program_arrays (zeros when absent), and ``max_steps``,
+    the optional seventh: they stop with status STATUS_STEP_LIMIT once stats[STEPS] reaches it
+    (their step counts are not known in advance: adaptive steps, implicit steps cut into pieces).
     """
     what = "step" if kind == "fixed" else "rtol"
     fix = "time.step (or --step)" if kind == "fixed" else "time.rtol (or --rtol)"
@@ -81,8 +87,9 @@ def segment_runner(name: str, kind: str, kernel, *, scaled: bool = False) -> Run
             return kernel(y, t0, t1, setting, active, codes, params, float(mass), inertia,
                           rot_only, t_out, y_out, stats)
         floors = program_arrays[5] if len(program_arrays) > 5 else np.zeros(4)
+        limit = int(program_arrays[6]) if len(program_arrays) > 6 else NO_STEP_LIMIT
         return kernel(y, t0, t1, setting, active, codes, params, float(mass), inertia,
-                      rot_only, t_out, y_out, stats, floors)
+                      rot_only, t_out, y_out, stats, floors, limit)
 
     run_segment.__name__ = f"run_segment_{name}"
     run_segment.__doc__ = (f"Advance y in place from t0 to t1 with {name} ({kind}; setting = "

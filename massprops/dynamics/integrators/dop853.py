@@ -25,13 +25,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from massprops.dynamics._jit import kernel
+from massprops.dynamics._jit import inlined, inner, kernel
 from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, D
 from massprops.dynamics.integrators._shared import (
     all_finite,
     blocks,
+    copy_into,
     emit_start,
     f,
     fill_nan,
@@ -47,6 +47,7 @@ from massprops.dynamics.integrators.base import (
     REJECTED,
     STATUS,
     STATUS_NONFINITE,
+    STATUS_STEP_LIMIT,
     STATUS_STEP_UNDERFLOW,
     STEPS,
     IntegratorSpec,
@@ -59,7 +60,7 @@ SAFE, FAC_MIN, FAC_MAX = 0.9, 1.0 / 3.0, 6.0
 """dop853.f's defaults: safety factor, and bounds of the step-size ratio h_new / h."""
 
 
-@njit(cache=True)
+@inner
 def _stages(y, h, k, first, last, prog, tmp):
     """k[s] = f(y + h Σ_j A[s, j] k[j]) for s in first..last-1 (k (16, n), rows < first given)."""
     n = y.shape[0]
@@ -72,13 +73,13 @@ def _stages(y, h, k, first, last, prog, tmp):
         f(tmp, prog, k[s])
 
 
-@njit(cache=True)
+@inner
 def _error_norms(k, h, ynew, blk, scales, rtol, trial):
     """(err, local_abs) of a trial step: err the scaled mixed norm of dop853.f (<= 1: accept),
     local_abs the absolute max-norm estimate. ``trial`` (4,) is scratch for the block scales
     including the trial end point."""
     n = ynew.shape[0]
-    trial[:] = scales
+    copy_into(scales, trial)
     grow_scales(ynew, blk, trial)
     err5 = err3 = emax = 0.0
     for i in range(n):
@@ -102,7 +103,7 @@ def _error_norms(k, h, ynew, blk, scales, rtol, trial):
     return err, local
 
 
-@njit(cache=True)
+@inlined
 def _initial_step(y, f0, rtol, hmax, blk, scales, prog, y1, f1):
     """Hairer's HINIT for order 8: h ~ 0.01 × (time scale of y from f and from f's change).
     Components with a zero scale (a block that is exactly zero) are left out. 1 evaluation."""
@@ -130,7 +131,7 @@ def _initial_step(y, f0, rtol, hmax, blk, scales, prog, y1, f1):
     return min(100.0 * h, h1, hmax)
 
 
-@njit(cache=True)
+@inner
 def _dense_coefficients(y, ynew, h, k, cont):
     """cont (8, n): the 7th-order interpolant of the step y -> ynew (k rows 0..15 complete)."""
     n = y.shape[0]
@@ -148,7 +149,7 @@ def _dense_coefficients(y, ynew, h, k, cont):
             cont[4 + r, i] = h * acc
 
 
-@njit(cache=True)
+@inner
 def _dense_row(cont, s, out, o):
     """out = the interpolant at fraction s of the step, quaternion re-normalised."""
     s1 = 1.0 - s
@@ -160,7 +161,7 @@ def _dense_row(cont, s, out, o):
 
 @kernel
 def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-            stats, floors):
+            stats, floors, max_steps):
     prog = (active, codes, params, mass, inertia, rot_only)
     n = y.shape[0]
     o = quat_offset(n)
@@ -191,7 +192,10 @@ def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_o
         if too_small(h, t, t0, t1):
             stats[STATUS] = STATUS_NONFINITE if nonfinite else STATUS_STEP_UNDERFLOW
             break
-        _stages(y, h, k, 1, 12, prog, tmp)
+        if stats[STEPS] >= max_steps:
+            stats[STATUS] = STATUS_STEP_LIMIT
+            break
+        _stages(y, h, k, 1, 12, prog, tmp)  # literal ranges: constant loop bounds
         for i in range(n):
             acc = 0.0
             for j in range(12):
@@ -216,8 +220,8 @@ def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_o
                 while kout < n_out and t_out[kout] <= t_new:
                     _dense_row(cont, (t_out[kout] - t) / h, y_out[kout], o)
                     kout += 1
-            y[:] = ynew
-            k[0, :] = k[12]
+            copy_into(ynew, y)
+            copy_into(k[12], k[0])
             grow_scales(y, blk, scales)
             t = t_new
             total += local

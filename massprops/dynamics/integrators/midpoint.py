@@ -24,9 +24,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from massprops.dynamics._jit import kernel
+from massprops.dynamics._jit import inlined, inner, kernel
 from massprops.dynamics.integrators._newton import (
     CONVERGED,
     DIVERGED,
@@ -42,6 +41,7 @@ from massprops.dynamics.integrators._newton import (
 from massprops.dynamics.integrators._shared import (
     all_finite,
     blocks,
+    copy_into,
     emit_hermite,
     emit_start,
     f,
@@ -61,6 +61,7 @@ from massprops.dynamics.integrators.base import (
     REJECTED,
     STATUS,
     STATUS_NONFINITE,
+    STATUS_STEP_LIMIT,
     STATUS_STEP_UNDERFLOW,
     STEPS,
     IntegratorSpec,
@@ -71,7 +72,7 @@ SLOW_RATE = 1e-3
 """Newton converging slower than this (after more than 2 iterations) asks for a new Jacobian."""
 
 
-@njit(cache=True)
+@inner
 def _factor(jac, h, lu, piv):
     """LU factors of I - h/2 J."""
     n = jac.shape[0]
@@ -82,7 +83,7 @@ def _factor(jac, h, lu, piv):
     return lu_factor(lu, piv)
 
 
-@njit(cache=True)
+@inner
 def _solve(y, h, z, prog, lu, piv, g, tmp, fz, blk, scales, trial, eta):
     """Simplified Newton for Z = y1 - y0 (start guess in z, updated in place).
 
@@ -100,7 +101,7 @@ def _solve(y, h, z, prog, lu, piv, g, tmp, fz, blk, scales, trial, eta):
         for i in range(n):
             g[i] = h * fz[i] - z[i]
         lu_solve(lu, piv, g)
-        trial[:] = scales
+        copy_into(scales, trial)
         for i in range(n):
             tmp[i] = y[i] + z[i] + g[i]
         grow_scales(tmp, blk, trial)
@@ -116,7 +117,7 @@ def _solve(y, h, z, prog, lu, piv, g, tmp, fz, blk, scales, trial, eta):
     return DIVERGED, MAX_ITER, theta, eta, MAX_ITER
 
 
-@njit(cache=True)
+@inlined
 def _richardson(y, h, y_full, jac, prog, lu, piv, g, tmp, fz, blk, scales, trial, z, mid, end):
     """(local error of the step y -> y_full of length h: 4/3 of its difference from two half
     steps, max-norm; evaluations). 0 if a half step does not converge (never seen: half steps
@@ -148,7 +149,7 @@ def _richardson(y, h, y_full, jac, prog, lu, piv, g, tmp, fz, blk, scales, trial
 
 @kernel
 def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-            stats, floors):
+            stats, floors, max_steps):
     prog = (active, codes, params, mass, inertia, rot_only)
     n = y.shape[0]
     o = quat_offset(n)
@@ -177,6 +178,9 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
         hs = big_h * 0.5 ** level
         clean = True
         while t < tb and status == 0:
+            if stats[STEPS] >= max_steps:  # Newton failures cut steps into pieces: bounded
+                status = STATUS_STEP_LIMIT
+                break
             h, t_next = piece(t, tb, hs)
             if not fresh and h_lu == 0.0:
                 if not fa_valid:
@@ -200,7 +204,8 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
                 stats[NFEV] += ev
             if outcome != CONVERGED:
                 stats[REJECTED] += 1
-                z[:] = 0.0
+                for i in range(n):
+                    z[i] = 0.0
                 h_prev = h
                 if not fresh:  # a stale Jacobian may be the cause: refresh it, same step
                     h_lu = 0.0
@@ -222,12 +227,12 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
                 f(ynew, prog, fb)
                 stats[NFEV] += 1
                 kout = emit_hermite(y, fa, ynew, fb, t, t_next, t_out, y_out, kout, o)
-                fa[:] = fb
+                copy_into(fb, fa)
                 fa_valid = True
             else:
                 fa_valid = False
-            y_last[:] = y
-            y[:] = ynew
+            copy_into(y, y_last)
+            copy_into(ynew, y)
             grow_scales(y, blk, scales)
             h_last, t = h, t_next
             stats[STEPS] += 1

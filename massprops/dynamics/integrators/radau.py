@@ -31,9 +31,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from massprops.dynamics._jit import kernel
+from massprops.dynamics._jit import inlined, inner, kernel
 from massprops.dynamics.integrators._newton import (
     CONVERGED,
     DIVERGED,
@@ -49,6 +48,7 @@ from massprops.dynamics.integrators._newton import (
 from massprops.dynamics.integrators._shared import (
     all_finite,
     blocks,
+    copy_into,
     emit_start,
     f,
     fill_nan,
@@ -67,6 +67,7 @@ from massprops.dynamics.integrators.base import (
     REJECTED,
     STATUS,
     STATUS_NONFINITE,
+    STATUS_STEP_LIMIT,
     STATUS_STEP_UNDERFLOW,
     STEPS,
     IntegratorSpec,
@@ -107,7 +108,7 @@ SLOW_RATE = 1e-3
 """Newton converging slower than this (after more than 2 iterations) asks for a new Jacobian."""
 
 
-@njit(cache=True)
+@inner
 def _factor(jac, h, lr, pr, lc, pc):
     """LU factors of the real system γ/h I - J and the 2n×2n form of the complex pair."""
     n = jac.shape[0]
@@ -127,7 +128,7 @@ def _factor(jac, h, lr, pr, lc, pc):
     return lu_factor(lr, pr) and lu_factor(lc, pc)
 
 
-@njit(cache=True)
+@inner
 def _guess(z, qpoly, x0, r):
     """Z⁰_j = u(x0 + c_j r) - u(x0) for the collocation polynomial u(x) = Σ_m Q_m x^m of an
     earlier step (x in units of that step, r = this step / that step)."""
@@ -138,7 +139,7 @@ def _guess(z, qpoly, x0, r):
                 + qpoly[2, i] * (x * x * x - x0 * x0 * x0)
 
 
-@njit(cache=True)
+@inner
 def _newton(y, h, z, w, fz, prog, lr, pr, lc, pc, rr, rc, tmp, blk, scales, trial, eta):
     """Simplified Newton iterations on the collocation equations, Z updated in place.
 
@@ -152,7 +153,7 @@ def _newton(y, h, z, w, fz, prog, lr, pr, lc, pc, rr, rc, tmp, blk, scales, tria
     eta = first_eta(eta)
     theta, norm_old, nfev = 0.0, math.inf, 0
     for it in range(MAX_ITER):
-        trial[:] = scales
+        copy_into(scales, trial)
         for s in range(3):
             for i in range(n):
                 tmp[i] = y[i] + z[s, i]
@@ -189,7 +190,7 @@ def _newton(y, h, z, w, fz, prog, lr, pr, lc, pc, rr, rc, tmp, blk, scales, tria
     return DIVERGED, MAX_ITER, theta, eta, nfev
 
 
-@njit(cache=True)
+@inlined
 def _richardson(y, h, y_full, qpoly, jac, prog, lr, pr, lc, pc, z, w, fz, rr, rc, tmp, blk,
                 scales, trial, mid, end):
     """(local error of the step y -> y_full of length h with collocation polynomial ``qpoly``:
@@ -217,7 +218,7 @@ def _richardson(y, h, y_full, qpoly, jac, prog, lr, pr, lc, pc, z, w, fz, rr, rc
     return 32.0 / 31.0 * d, nfev
 
 
-@njit(cache=True)
+@inner
 def _emit(y, z, t, h, t_next, ynew, qpoly, t_out, y_out, k, o):
     """Dense output from the collocation polynomial of the step t -> t_next; returns the next k.
     qpoly (3, n) := the polynomial's coefficients (also the next step's Newton start guess)."""
@@ -227,7 +228,7 @@ def _emit(y, z, t, h, t_next, ynew, qpoly, t_out, y_out, k, o):
             qpoly[m, i] = VINV[m, 0] * z[0, i] + VINV[m, 1] * z[1, i] + VINV[m, 2] * z[2, i]
     while k < t_out.shape[0] and t_out[k] <= t_next:
         if t_out[k] >= t_next:
-            y_out[k, :] = ynew
+            copy_into(ynew, y_out[k])
         else:
             s = (t_out[k] - t) / h
             for i in range(n):
@@ -239,7 +240,7 @@ def _emit(y, z, t, h, t_next, ynew, qpoly, t_out, y_out, k, o):
 
 @kernel
 def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-            stats, floors):
+            stats, floors, max_steps):
     prog = (active, codes, params, mass, inertia, rot_only)
     n = y.shape[0]
     o = quat_offset(n)
@@ -263,6 +264,9 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
         hs = big_h * 0.5 ** level
         clean = True
         while t < tb and status == 0:
+            if stats[STEPS] >= max_steps:  # Newton failures cut steps into pieces: bounded
+                status = STATUS_STEP_LIMIT
+                break
             h, t_next = piece(t, tb, hs)
             if not fresh and h_lu == 0.0:
                 f(y, prog, f0)
@@ -301,8 +305,8 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
                 status = STATUS_NONFINITE
                 break
             kout = _emit(y, z, t, h, t_next, ynew, qpoly, t_out, y_out, kout, o)
-            y_last[:] = y
-            y[:] = ynew
+            copy_into(y, y_last)
+            copy_into(ynew, y)
             grow_scales(y, blk, scales)
             t = t_next
             stats[STEPS] += 1

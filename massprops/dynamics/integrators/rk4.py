@@ -12,11 +12,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from massprops.dynamics._jit import kernel
+from massprops.dynamics._jit import inlined, inner, kernel
 from massprops.dynamics.integrators._shared import (
     all_finite,
+    copy_into,
     emit_hermite,
     emit_start,
     f,
@@ -35,7 +35,7 @@ from massprops.dynamics.integrators.base import (
 )
 
 
-@njit(cache=True)
+@inner
 def rk4_step(y, k1, h, prog, out, k2, k3, k4, tmp):
     """out = one RK4 step of length h from y (with k1 = ẏ(y) given); 3 evaluations.
 
@@ -57,7 +57,7 @@ def rk4_step(y, k1, h, prog, out, k2, k3, k4, tmp):
     project_quaternion(out, quat_offset(n))
 
 
-@njit(cache=True)
+@inlined
 def _richardson(y, fy, h, y_full, prog, k2, k3, k4, tmp, mid, fmid, end):
     """Local error (max-norm, absolute) of the RK4 step y -> y_full of length h: 16/15 of its
     difference from two half steps. 7 evaluations."""
@@ -101,13 +101,13 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
         if k < n_out and t_out[k] <= t_b:
             k = emit_hermite(cur, fa, ynew, fb, t_a, t_b, t_out, y_out, k, o)
         if i == m - 1:
-            y_last[:] = cur
-            f_last[:] = fa
+            copy_into(cur, y_last)
+            copy_into(fa, f_last)
         cur, ynew = ynew, cur  # the new state becomes current: swap, no copy
         fa, fb = fb, fa
         t_a = t_b
         i += 1
-    y[:] = cur
+    copy_into(cur, y)
     stats[STEPS] += i
     stats[NFEV] += nfev
     if not ok:

@@ -48,11 +48,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from massprops.dynamics._jit import kernel
+from massprops.dynamics._jit import inlined, jit, kernel
 from massprops.dynamics.integrators._shared import (
     all_finite,
+    copy_into,
     emit_start,
     fill_nan,
     project_quaternion,
@@ -96,7 +96,7 @@ s9odr6a (γ5 = 0.79854399093482996340 there; here 1 - 2 Σ of the others, equal 
 
 
 # --- one composed step -------------------------------------------------------------------------
-@njit(cache=True)
+@jit
 def composed_step(y, h, gam, kp, wk, dw):
     """y := Ψ_h(y) in place (h may be any sign); returns the force evaluations used.
 
@@ -119,14 +119,7 @@ def composed_step(y, h, gam, kp, wk, dw):
     return nfev
 
 
-@njit(cache=True)
-def _copy(src, dst):
-    """dst[:] = src element by element (no slice objects in the step loop)."""
-    for i in range(src.shape[0]):
-        dst[i] = src[i]
-
-
-@njit(cache=True)
+@inlined
 def _emit_partial(y_a, y_b, t_a, t_b, gam, kp, wk, dw, part, t_out, y_out, k):
     """Fill y_out rows from k on whose times are <= t_b (the step t_a -> t_b from y_a to y_b):
     a partial step of length t_out[k] - t_a from y_a, or y_b itself at t_b. Returns (next k,
@@ -134,20 +127,20 @@ def _emit_partial(y_a, y_b, t_a, t_b, gam, kp, wk, dw, part, t_out, y_out, k):
     nfev = 0
     while k < t_out.shape[0] and t_out[k] <= t_b:
         if t_out[k] >= t_b:
-            _copy(y_b, y_out[k])
+            copy_into(y_b, y_out[k])
         else:
-            _copy(y_a, part)
+            copy_into(y_a, part)
             nfev += composed_step(part, t_out[k] - t_a, gam, kp, wk, dw)
-            _copy(part, y_out[k])
+            copy_into(part, y_out[k])
         k += 1
     return k, nfev
 
 
-@njit(cache=True)
+@inlined
 def _richardson(y_a, y_b, h, gam, order, kp, wk, dw, part):
     """Local error (max-norm, absolute) of the step y_a -> y_b of length h: 2^p/(2^p - 1) of its
     difference from two half steps. Returns (error, evaluations used)."""
-    _copy(y_a, part)
+    copy_into(y_a, part)
     nfev = composed_step(part, 0.5 * h, gam, kp, wk, dw)
     nfev += composed_step(part, 0.5 * h, gam, kp, wk, dw)
     d = 0.0
@@ -179,10 +172,10 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
     i = 0
     while i < m:
         t_b = t1 if i == m - 1 else t0 + (i + 1) * h
-        _copy(y, y_a)
+        copy_into(y, y_a)
         nfev += composed_step(y, h, gam, kp, wk, dw)
         if not all_finite(y):
-            _copy(y_a, y)  # the last finite state
+            copy_into(y_a, y)  # the last finite state
             ok = False
             break
         if k < t_out.shape[0] and t_out[k] <= t_b:

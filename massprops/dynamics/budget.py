@@ -1,0 +1,88 @@
+"""The run bound: how many steps and output samples one run may take, so that no scene runs for
+hours or exhausts memory. Checked up front where the count is known, while running where not.
+
+- Samples: at most `MAX_SAMPLES` output times per run (each keeps ~20 float64 numbers in memory
+  and a line in the trajectory file); more is refused up front, naming the count and the
+  interval that fits.
+- Fixed steps: a run of duration T at step h takes ceil(T / h) steps (one more per force window
+  edge); more than `MAX_STEPS` is refused up front, naming the count and the step that fits.
+- Adaptive steps cannot be counted in advance: the run stops once it has taken `MAX_STEPS`, or
+  earlier, once it has taken `PROJECT_AFTER`, if its pace so far (steps per simulated second)
+  projects more than `PROJECT_MARGIN` times `MAX_STEPS` for the whole run. What was computed is
+  kept (the CLI writes it) and the error (`RunBudgetError`, exit 3) says where it stopped and
+  what to change.
+
+Every run is bounded alike: the main run, the error estimate's companions and probe, and the
+reference and ladder runs of ``precision`` (whose fixed-step ladders leave out rungs beyond
+``precision.MAX_STEPS`` anyway). The closed form takes no steps; only its samples are bounded.
+"""
+
+from __future__ import annotations
+
+import math
+
+from massprops.errors import RunBudgetError
+
+MAX_STEPS = 20_000_000
+"""Steps one run may take unless the caller says otherwise (``simulate(max_steps=)``, the CLI's
+--max-steps). Measured cost per step (warm, one shared core, a body on a damped spring): rk4
+~1 µs, midpoint ~2.5 µs, dop853 ~5 µs, implicit ~5 µs, splitting ~8 µs, splitting6 ~50 µs (nine
+drifts per step), so a run reaches the bound after ~20 s (rk4) to ~2 min (dop853, implicit), 15
+min at most (splitting6), and a fixed-step run that needs more is refused in the first place."""
+
+PROJECT_AFTER = 1_000_000
+"""Steps an adaptive run takes before its pace is used to project the whole run (a start whose
+transient needs small steps must not be judged on them alone)."""
+
+PROJECT_MARGIN = 10.0
+"""An adaptive run stops early only when its projection exceeds MAX_STEPS this many times."""
+
+MAX_SAMPLES = 2_000_000
+"""Output samples one run may keep (~0.3 GB of trajectory arrays, a ~0.5 GB CSV file)."""
+
+
+def _where(source: str) -> str:
+    return f"{source}: " if source else ""
+
+
+def check_samples(duration: float, every: float, source: str = "") -> int:
+    """The number of sample intervals k·every in [0, duration]; raises RunBudgetError (before
+    anything is allocated) when the samples would exceed MAX_SAMPLES."""
+    n = duration / every
+    if not n < MAX_SAMPLES:
+        raise RunBudgetError(
+            f"{_where(source)}sampling every {every:.3g} s over {duration:.6g} s gives "
+            f"{n:.3g} output samples, "
+            f"more than the run bound of {MAX_SAMPLES:.0e}; set output.every (or --every) to at "
+            f"least {duration / MAX_SAMPLES:.3g} s, or shorten time.duration")
+    return int(math.floor(n * (1 + 1e-12)))
+
+
+def check_fixed_steps(name: str, duration: float, step: float, edges: int,
+                      source: str = "", limit: int | None = None) -> None:
+    """Refuse a fixed-step run whose step count (duration / step, plus one per window edge)
+    exceeds ``limit`` (default MAX_STEPS), naming the count and the step that fits."""
+    limit = limit or MAX_STEPS
+    steps = duration / step + edges
+    if steps > limit:
+        raise RunBudgetError(
+            f"{_where(source)}{name} at step {step:.3g} s over {duration:.6g} s would take "
+            f"{steps:.3g} steps, "
+            f"more than the run bound of {limit:.3g} (--max-steps); set time.step (or --step) "
+            f"to at least {duration / limit:.3g} s, shorten time.duration, or use an adaptive "
+            "or closed-form integrator (dop853, exact)")
+
+
+def exhausted(steps: int, fraction_done: float, limit: int | None = None) -> str | None:
+    """Why a run that has taken ``steps`` and covered ``fraction_done`` of its duration must
+    stop now (``limit``: default MAX_STEPS), or None to go on."""
+    limit = limit or MAX_STEPS
+    if steps >= limit:
+        return f"it has taken {steps:.3g} steps, the run bound (--max-steps)"
+    if steps >= min(PROJECT_AFTER, limit // 10) and fraction_done > 0.0:
+        projected = steps / fraction_done
+        if projected > PROJECT_MARGIN * limit:
+            return (f"at its pace so far ({steps:.3g} steps for {100 * fraction_done:.3g} % of "
+                    f"the run) it would need ~{projected:.2g} steps, beyond the run bound of "
+                    f"{limit:.3g} (--max-steps)")
+    return None

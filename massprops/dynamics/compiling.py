@@ -1,0 +1,212 @@
+"""Getting the compiled kernels of a run ready: loaded from numba's on-disk cache, or compiled once
+for this machine with one notice, and on a machine with a spare core the independent ones
+compiled side by side.
+
+numba keeps every compiled kernel in its cache (``massprops.dynamics`` keys the folder by a hash
+of the package's sources); a kernel the cache lacks is compiled on its first call, a few seconds
+of one core. `prepare` gets the kernels of the integrators a command will use ready before any
+run starts, so that compiling never happens inside a timed run or on a helper thread, and so that
+the caller hears about it while it happens:
+
+- the notice is honest: it is given when numba actually starts compiling (its "numba:compile"
+  event fires only on a cache miss, never for a kernel loaded from the cache), once per
+  `prepare`, on the calling thread, never by printing (the CLI passes a function that writes the
+  line to stderr);
+- in a process that runs massprops alone (the CLI calls `whole_process`; a library import
+  keeps numba as it is and everything in its own process), numba is started lean
+  (``_jit.start_numba_lean``), and the first compile starts one helper process that compiles
+  the batch's other kernels into the same cache on the second core; the caller waits for it
+  before loading them (a helper that fails costs nothing but the time: the kernels are then
+  compiled here).
+
+The closed form (``exact``) needs no compiled kernel: it is evaluated with numpy.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+COMPILE_SECONDS = {"rk4": 2.0, "dop853": 3.0, "implicit": 8.0, "midpoint": 5.0,
+                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0}
+"""About how long (s, one idle core) compiling each method's kernels takes from an empty cache,
+from benchmarks/bench_first_run.py; only for the notice's estimate. The three splitting methods
+share one kernel."""
+
+SHARED_KERNEL = {"splitting4": "splitting", "splitting6": "splitting"}
+"""Methods whose compiled kernel is another's (compiling one compiles both)."""
+
+HELPER_TIMEOUT_S = 600.0
+"""The longest the caller waits for the helper process before compiling the rest itself."""
+
+_whole_process = False
+
+
+def whole_process(alone: bool = True) -> None:
+    """Declare that this process runs massprops alone (the CLI): `prepare` then starts numba lean
+    and may compile independent kernels in a helper process. Never call it where users' own
+    numba code runs."""
+    global _whole_process
+    _whole_process = alone
+
+
+def compiled_names(names: Sequence[str]) -> list[str]:
+    """The distinct compiled kernels behind ``names`` (integrator names), in order; the closed
+    form and methods sharing a kernel drop out."""
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    out: list[str] = []
+    for name in names:
+        if INTEGRATORS[name].kind == "exact":
+            continue
+        kernel = SHARED_KERNEL.get(name, name)
+        if kernel not in out:
+            out.append(kernel)
+    return out
+
+
+def prepare(names: Sequence[str], notice: Callable[[str], None] | None = None) -> float:
+    """Load or compile the kernels of the integrators ``names``; returns the seconds spent.
+
+    ``notice(text)`` is called once, on this thread, when numba starts compiling (a cache miss)
+    with one line saying what is compiled and about how long it takes; never when everything
+    comes from the cache.
+    """
+    kernels = compiled_names(names)
+    if not kernels:
+        return 0.0
+    start = time.perf_counter()
+    from numba.core import event
+
+    if _whole_process:
+        from massprops.dynamics._jit import start_numba_lean
+
+        start_numba_lean()
+
+    watch = _Watch(kernels, notice)
+
+    class Listener(event.Listener):
+        def on_start(self, ev) -> None:
+            watch.on_start()
+
+        def on_end(self, ev) -> None:
+            pass
+
+    with event.install_listener("numba:compile", Listener()):
+        try:
+            pending = list(kernels)
+            while pending:
+                name = pending.pop(0)
+                if name in watch.helper_kernels:
+                    if any(k not in watch.helper_kernels for k in pending):
+                        pending.append(name)  # ours first, the helper's once it is done
+                        continue
+                    watch.wait_for_helper()
+                warm_up(name)
+                watch.done.append(name)
+        finally:
+            watch.stop_helper()
+    return time.perf_counter() - start
+
+
+def warm_up(name: str) -> None:
+    """Run integrator ``name`` for one tiny step on a stand-in problem whose arguments have the
+    types of every real run (so the call loads or compiles the very kernel the runs use)."""
+    from massprops.dynamics.forces import GRAVITY, NPAR
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    spec = INTEGRATORS[name]
+    y = np.zeros(13)
+    y[6] = 1.0
+    arrays = (np.ones(1, dtype=np.bool_), np.array([GRAVITY], dtype=np.int64),
+              np.zeros((1, NPAR)), 1.0, np.array([1.0, 2.0, 3.0]), np.ones(4), 1000)
+    setting = 1e-6 if spec.kind == "adaptive" else 1e-9
+    spec.run_segment(y, 0.0, 1e-9, setting, arrays, False, np.empty(0), np.empty((0, 13)),
+                     np.zeros(5, dtype=np.int64))
+
+
+def _estimate(kernels: Sequence[str]) -> float:
+    return sum(COMPILE_SECONDS.get(k, 5.0) for k in kernels)
+
+
+class _Watch:
+    """numba "numba:compile" listener: the notice on the first compile, and the helper process."""
+
+    def __init__(self, kernels: list[str], notice: Callable[[str], None] | None) -> None:
+        self.kernels, self.notice = kernels, notice
+        self.done: list[str] = []
+        self.started = False
+        self.helper: subprocess.Popen | None = None
+        self.helper_kernels: list[str] = []
+
+    def on_start(self) -> None:
+        """numba started compiling something (a cache miss)."""
+        if self.started:
+            return
+        self.started = True
+        rest = [k for k in self.kernels if k not in self.done]
+        if _whole_process and len(rest) > 1:
+            self.helper_kernels = _second_share(rest)
+            self.helper = _spawn(self.helper_kernels)
+        if self.notice is not None:
+            names = ", ".join(rest)
+            self.notice(f"compiling the {names} kernel{'s' if len(rest) > 1 else ''} once for "
+                        f"this machine (~{_wall_estimate(rest, self.helper_kernels):.0f} s); "
+                        f"later runs load {'them' if len(rest) > 1 else 'it'} from the cache")
+
+    def wait_for_helper(self) -> None:
+        """Block until the helper has finished (its kernels are then in the cache)."""
+        if self.helper is None:
+            return
+        try:
+            self.helper.wait(timeout=HELPER_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            pass
+        self.stop_helper()
+
+    def stop_helper(self) -> None:
+        helper, self.helper = self.helper, None
+        if helper is not None and helper.poll() is None:
+            helper.kill()
+            helper.wait()
+
+
+def _second_share(kernels: list[str]) -> list[str]:
+    """The kernels the helper compiles: the first stays here (it is compiling already); the rest
+    go, largest first, to whichever side has less to do."""
+    here, there = [kernels[0]], []
+    for name in sorted(kernels[1:], key=lambda k: -COMPILE_SECONDS.get(k, 5.0)):
+        (there if _estimate(there) < _estimate(here) else here).append(name)
+    return there
+
+
+def _wall_estimate(kernels: list[str], helper: list[str]) -> float:
+    if not helper:
+        return _estimate(kernels)
+    return max(_estimate([k for k in kernels if k not in helper]), _estimate(helper))
+
+
+def _spawn(kernels: list[str]) -> subprocess.Popen | None:
+    """A helper process compiling ``kernels`` into the same cache (None if it cannot start)."""
+    code = ("import sys; from massprops.dynamics.compiling import helper_main; "
+            "helper_main(sys.argv[1:])")
+    try:
+        return subprocess.Popen([sys.executable, "-c", code, *kernels], env=os.environ.copy(),
+                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+    except OSError:
+        return None
+
+
+def helper_main(kernels: list[str]) -> None:
+    """The helper process: load or compile ``kernels`` into the shared cache, then exit."""
+    from massprops.dynamics._jit import start_numba_lean
+
+    start_numba_lean()
+    for name in kernels:
+        warm_up(name)

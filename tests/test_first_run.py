@@ -1,0 +1,109 @@
+"""The first run on a fresh machine (issue 8 §1): the exact path needs no compiler, and a run
+that compiles says so once on stderr, only when numba really compiles (a cache miss), never on
+stdout and never when everything loads from the cache. Each case that observes numba's start or
+its cache runs in a fresh process with its own empty cache folder (NUMBA_CACHE_DIR)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+from conftest import ROOT
+
+from massprops.dynamics import compiling
+
+EXACT_SCENE = ("body: {mass: 1, inertia: [[1, 0, 0], [0, 2, 0], [0, 0, 3]]}\n"
+               "initial: {angular_velocity: [0.3, 5.0, 0.2]}\n"
+               "forces: [{type: gravity, g: [0, 0, -9.81]}]\n"
+               "time: {duration: 20.0}\noutput: {every: 0.01}\n")
+RK4_SCENE = ("body: {mass: 1, inertia: [[1, 0, 0], [0, 2, 0], [0, 0, 3]]}\n"
+             "initial: {angular_velocity: [0.3, 1.0, 0.2]}\n"
+             "forces: [{type: torque, vector: [0, 0.1, 0]}]\n"
+             "time: {duration: 0.5, integrator: rk4, step: 1.0e-3}\n")
+
+CLI = """
+import json, sys
+from massprops.cli import main
+try:
+    main(sys.argv[1:])
+except SystemExit as exc:
+    code = exc.code
+print(json.dumps({"exit": code, "numba": "numba" in sys.modules,
+                  "scipy_special": "scipy.special" in sys.modules}), file=sys.stderr)
+"""
+
+
+def fresh_process(cache, *args) -> tuple[str, list[str], dict]:
+    """(stdout, stderr lines but the probe's, probe) of the CLI in a new process."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    out = subprocess.run([sys.executable, "-c", CLI, *map(str, args)], cwd=ROOT, env=env,
+                         capture_output=True, text=True, timeout=300)
+    lines = out.stderr.strip().splitlines()
+    return out.stdout, lines[:-1], json.loads(lines[-1])
+
+
+def test_an_exact_run_imports_neither_numba_nor_scipy_special(tmp_path):
+    path = tmp_path / "free.yaml"
+    path.write_text(EXACT_SCENE)
+    stdout, errors, probe = fresh_process(tmp_path / "cache", "simulate", path, "--json", "-q")
+    assert probe == {"exit": 0, "numba": False, "scipy_special": False}
+    assert errors == []  # nothing compiled, nothing said
+    result = json.loads(stdout)
+    assert result["integrator"] == "exact" and result["steps"] == 0
+    assert not (tmp_path / "cache").exists() or not any((tmp_path / "cache").iterdir())
+
+
+@pytest.mark.timeout(300)
+def test_the_compile_notice_is_one_stderr_line_on_a_cache_miss_only(tmp_path):
+    path = tmp_path / "torqued.yaml"
+    path.write_text(RK4_SCENE)
+    cache = tmp_path / "cache"
+    stdout, errors, probe = fresh_process(cache, "simulate", path, "--json", "-q")
+    assert probe["exit"] == 0 and probe["numba"] is True
+    (line,) = errors
+    assert line.startswith("massprops: compiling the rk4 kernel once for this machine")
+    assert "later runs load it from the cache" in line
+    assert json.loads(stdout)["integrator"] == "rk4"  # stdout is the JSON alone
+    again, errors, probe = fresh_process(cache, "simulate", path, "--json", "-q")
+    assert probe["exit"] == 0 and errors == []  # loaded from the cache: silent
+    assert json.loads(again)["final"] == json.loads(stdout)["final"]
+
+
+def test_kernels_behind_integrator_names():
+    assert compiling.compiled_names(["exact", "splitting6", "splitting", "dop853", "dop853"]) \
+        == ["splitting", "dop853"]
+    assert compiling.compiled_names(["exact"]) == []
+
+
+def test_prepare_of_the_closed_form_does_nothing():
+    heard = []
+    assert compiling.prepare(["exact"], heard.append) == 0.0
+    assert heard == []
+
+
+def test_the_first_compile_says_so_once_and_shares_the_rest_with_a_helper(monkeypatch):
+    """The listener's reaction to numba's compile event, without compiling: one notice naming
+    what is still to do, and in a CLI process a helper for the kernels the second core takes."""
+    spawned, heard = [], []
+    monkeypatch.setattr(compiling, "_whole_process", True)
+    monkeypatch.setattr(compiling, "_spawn", lambda kernels: spawned.append(kernels))
+    watch = compiling._Watch(["implicit", "dop853", "rk4"], heard.append)
+    watch.done.append("implicit")  # already loaded from the cache: not compiled, not named
+    watch.on_start()
+    watch.on_start()  # later compiles of the batch: silent
+    assert spawned == [["rk4"]]  # dop853 is compiling here now; the helper takes the other
+    (text,) = heard
+    assert text.startswith("compiling the dop853, rk4 kernels once for this machine (~")
+    assert "later runs load them from the cache" in text
+
+
+def test_a_library_process_never_starts_a_helper(monkeypatch):
+    spawned = []
+    monkeypatch.setattr(compiling, "_whole_process", False)
+    monkeypatch.setattr(compiling, "_spawn", lambda kernels: spawned.append(kernels))
+    watch = compiling._Watch(["implicit", "dop853"], None)
+    watch.on_start()
+    assert spawned == [] and watch.helper is None
