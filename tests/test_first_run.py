@@ -107,3 +107,18 @@ def test_a_library_process_never_starts_a_helper(monkeypatch):
     watch = compiling._Watch(["implicit", "dop853"], None)
     watch.on_start()
     assert spawned == [] and watch.helper is None
+
+
+@pytest.mark.timeout(300)
+def test_a_held_body_compiles_its_reaction_loop_on_a_cold_cache(tmp_path):
+    """A Lagrange top moves in closed form, but its reactions evaluate the force law compiled:
+    on an empty cache that kernel must be found and compiled (with the notice), in a process that
+    imported nothing else of the dynamics first."""
+    stdout, errors, probe = fresh_process(tmp_path / "cache", "simulate",
+                                          ROOT / "sample_scenes" / "heavy_top.yaml", "--json", "-q")
+    assert probe["exit"] == 0, errors
+    assert [e for e in errors if "compiling" in e] == [
+        "massprops: compiling the reactions kernel once for this machine (~2 s); later runs "
+        "load it from the cache"]
+    result = json.loads(stdout)
+    assert result["integrator"] == "exact" and len(result["final"]["joints"]) == 1

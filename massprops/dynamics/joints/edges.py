@@ -21,8 +21,8 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from massprops.dynamics._jit import jit  # also registers force_torque for compiled callers
 from massprops.dynamics.forces import force_torque
 from massprops.dynamics.frames import to_world
 from massprops.rotation import matrix_to_quat, quat_multiply, quat_to_matrix
@@ -53,7 +53,7 @@ class JointLoads:
                 "torque_body": vec(self.torque_body)}
 
 
-@njit(cache=True)
+@jit
 def _applied(states, times, windows, codes, params, out):
     """out (n, 6) := force_torque of the pinned body's loads at each state (n, 13), with the
     terms active at each time: (total force, world, N; torque about the held point, E frame)."""
@@ -65,6 +65,18 @@ def _applied(states, times, windows, codes, params, out):
         ft = force_torque(states[i], 6, active, codes, params)
         for c in range(6):
             out[i, c] = ft[c]
+
+
+def warm_up() -> None:
+    """Load or compile `_applied` with the argument types of every real call (for
+    massprops.dynamics.compiling: a held body's reactions need it even when its motion is a
+    closed form)."""
+    from massprops.dynamics.forces import GRAVITY, NPAR
+
+    state = np.zeros((1, 13))
+    state[0, 6] = 1.0
+    _applied(state, np.zeros(1), np.array([[0.0, np.inf]]), np.array([GRAVITY], dtype=np.int64),
+             np.zeros((1, NPAR)), np.empty((1, 6)))
 
 
 def _unit_quats(y: np.ndarray) -> np.ndarray:
