@@ -32,13 +32,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-JOINT_LOADS = "reactions"
-"""Not an integrator: the compiled loop of a held body's applied loads at the samples, which its
-reactions need whatever method moved it (massprops.dynamics.joints.edges)."""
-
 COMPILE_SECONDS = {"rk4": 2.0, "dop853": 3.0, "implicit": 8.0, "midpoint": 5.0,
-                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0,
-                   JOINT_LOADS: 1.5}
+                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0}
 """About how long (s, one idle core) compiling each method's kernels takes from an empty cache,
 from benchmarks/bench_first_run.py; only for the notice's estimate. The three splitting methods
 share one kernel."""
@@ -67,7 +62,7 @@ def compiled_names(names: Sequence[str]) -> list[str]:
 
     out: list[str] = []
     for name in names:
-        if name != JOINT_LOADS and INTEGRATORS[name].kind == "exact":
+        if INTEGRATORS[name].kind == "exact":
             continue
         kernel = SHARED_KERNEL.get(name, name)
         if kernel not in out:
@@ -122,10 +117,6 @@ def prepare(names: Sequence[str], notice: Callable[[str], None] | None = None) -
 def warm_up(name: str) -> None:
     """Run integrator ``name`` for one tiny step on a stand-in problem whose arguments have the
     types of every real run (so the call loads or compiles the very kernel the runs use)."""
-    if name == JOINT_LOADS:
-        from massprops.dynamics.joints.edges import warm_up as warm_up_loads
-
-        return warm_up_loads()
     from massprops.dynamics.forces import GRAVITY, NPAR
     from massprops.dynamics.integrators import INTEGRATORS
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.dynamics.accuracy import Scales, exact_roundoff, global_estimate, state_error
-from massprops.dynamics.compiling import JOINT_LOADS, prepare
+from massprops.dynamics.compiling import prepare
 from massprops.dynamics.forces import ForceProgram, compile_forces
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.model import Scene
@@ -121,8 +121,7 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
         names = [n for n in names if n in integrators]
     t_out = np.linspace(0.0, scene.time.duration, SAMPLES + 1)
     prepare([*names, reference_method(scene, program, INTEGRATORS),
-             *(["dop853"] if any(INTEGRATORS[n].stiff for n in names) else []),
-             *([JOINT_LOADS] if program.joints is not None else [])], notice)
+             *(["dop853"] if any(INTEGRATORS[n].stiff for n in names) else [])], notice)
     truth, reference = reference_run(scene, program, INTEGRATORS, t_out)
     scales = Scales.of(scene.body.size, truth, scene.time.duration)
     plan = [(n, s) for n in names for s in ladder(INTEGRATORS[n], scene, program)]

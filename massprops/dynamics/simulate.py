@@ -18,7 +18,7 @@ from massprops.dynamics.accuracy import (
     state_error,
 )
 from massprops.dynamics.budget import check_fixed_steps, check_samples
-from massprops.dynamics.compiling import JOINT_LOADS, prepare
+from massprops.dynamics.compiling import prepare
 from massprops.dynamics.forces import (
     DRAG,
     FORCE_BODY,
@@ -181,10 +181,9 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
 
 
 def kernels_needed(spec, setting: float, program: ForceProgram) -> list[str]:
-    """The compiled kernels a run of ``spec`` at ``setting`` calls: its integrator's, dop853's
-    when the stiffness probe will run (stiffness.unresolved), and a held body's reaction loop."""
-    return [spec.name, *(["dop853"] if unresolved(spec, setting, program) else []),
-            *([JOINT_LOADS] if program.joints is not None else [])]
+    """The integrators whose compiled kernels a run of ``spec`` at ``setting`` calls: its own,
+    and dop853 when the stiffness probe will run (stiffness.unresolved)."""
+    return [spec.name, *(["dop853"] if unresolved(spec, setting, program) else [])]
 
 
 def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,

@@ -22,7 +22,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from massprops.dynamics._jit import jit  # also registers force_torque for compiled callers
 from massprops.dynamics.forces import force_torque
 from massprops.dynamics.frames import to_world
 from massprops.rotation import matrix_to_quat, quat_multiply, quat_to_matrix
@@ -53,30 +52,21 @@ class JointLoads:
                 "torque_body": vec(self.torque_body)}
 
 
-@jit
-def _applied(states, times, windows, codes, params, out):
-    """out (n, 6) := force_torque of the pinned body's loads at each state (n, 13), with the
-    terms active at each time: (total force, world, N; torque about the held point, E frame)."""
-    k = codes.shape[0]
-    active = np.empty(k, dtype=np.bool_)
-    for i in range(states.shape[0]):
-        for r in range(k):
-            active[r] = windows[r, 0] <= times[i] and times[i] < windows[r, 1]
-        ft = force_torque(states[i], 6, active, codes, params)
+def _applied(states: np.ndarray, times: np.ndarray, windows: np.ndarray, codes: np.ndarray,
+             params: np.ndarray) -> np.ndarray:
+    """(n, 6): `forces.force_torque` of the pinned body's loads at each state (n, 13), with the
+    terms active at each time: (total force, world, N; torque about the held point, E frame).
+    numpy over all samples at once, one call per pattern of active terms (the force law is
+    written elementwise): a held body's reactions need no compiler."""
+    active = (windows[:, 0] <= times[:, None]) & (times[:, None] < windows[:, 1])  # (n, k)
+    patterns, which = np.unique(active, axis=0, return_inverse=True)
+    out = np.empty((states.shape[0], 6))
+    for j, pattern in enumerate(patterns):
+        rows = np.flatnonzero(which.reshape(-1) == j)
+        loads = force_torque(states[rows].T, 6, pattern, codes, params)
         for c in range(6):
-            out[i, c] = ft[c]
-
-
-def warm_up() -> None:
-    """Load or compile `_applied` with the argument types of every real call (for
-    massprops.dynamics.compiling: a held body's reactions need it even when its motion is a
-    closed form)."""
-    from massprops.dynamics.forces import GRAVITY, NPAR
-
-    state = np.zeros((1, 13))
-    state[0, 6] = 1.0
-    _applied(state, np.zeros(1), np.array([[0.0, np.inf]]), np.array([GRAVITY], dtype=np.int64),
-             np.zeros((1, NPAR)), np.empty((1, 6)))
+            out[rows, c] = loads[c]
+    return out
 
 
 def _unit_quats(y: np.ndarray) -> np.ndarray:
@@ -109,9 +99,7 @@ def _rates(model, t: np.ndarray, y: np.ndarray):
     """(applied force world (n, 3), torque about the point n_P (n, 3) E, ω̇' (n, 3) E,
     gyroscopic ω' × J_P ω' (n, 3) E) at the samples."""
     base = model.base
-    out = np.empty((len(t), 6))
-    _applied(np.ascontiguousarray(y), np.asarray(t, np.float64), base.windows, base.codes,
-             base.params, out)
+    out = _applied(y, np.asarray(t, np.float64), base.windows, base.codes, base.params)
     force, torque = out[:, 0:3], out[:, 3:6]
     j = model.inertia_point
     w = y[:, 10:13]
