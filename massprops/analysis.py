@@ -43,15 +43,21 @@ class Inspection:
     def warnings(self) -> tuple[str, ...]:
         return tuple(self.health.warnings)
 
+    def repairs_as_dict(self) -> dict | None:
+        """The contract's ``repairs`` object: the health check's weld of round-off cracks and
+        the repairs asked for, each by its name; None when nothing was repaired."""
+        repairs = {} if self.health.weld is None else {"weld": self.health.weld}
+        repairs.update(self.repairs or {})
+        return {key: record.as_dict() for key, record in repairs.items()} or None
+
     def as_dict(self) -> dict:
         """The contract's JSON object for `inspect --json`."""
         out = {"file": self.mesh.name}
         out.update(self.properties.as_dict())
         out["mesh"] = self.health.as_dict()
-        repairs = {} if self.health.weld is None else {"weld": self.health.weld}
-        repairs.update(self.repairs or {})
-        if repairs:
-            out["repairs"] = {key: record.as_dict() for key, record in repairs.items()}
+        repairs = self.repairs_as_dict()
+        if repairs is not None:
+            out["repairs"] = repairs
         out["warnings"] = list(self.warnings)
         return out
 

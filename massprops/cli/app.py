@@ -1,0 +1,47 @@
+"""The ``massprops`` group and the process entry point (exit codes of click's own errors, Ctrl-C,
+a fast exit)."""
+
+from __future__ import annotations
+
+import gc
+import sys
+
+import click
+
+from massprops import __version__
+from massprops.cli.common import say_error
+from massprops.errors import UsageError
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="massprops")
+@click.option("--debug", is_flag=True, help="Show tracebacks instead of one-line errors.")
+@click.pass_context
+def cli(ctx: click.Context, debug: bool) -> None:
+    """Mass properties and rigid-body dynamics of closed meshes (SI units)."""
+    ctx.ensure_object(dict)
+    ctx.obj["debug"] = debug
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point: click's own usage errors exit 2; Ctrl-C exits 130 without a traceback."""
+    try:
+        # non-standalone: click returns ctx.exit's code instead of exiting itself
+        code = cli.main(args=argv, prog_name="massprops", standalone_mode=False)
+    except click.ClickException as exc:
+        exc.show()
+        sys.exit(exc.exit_code)
+    except click.exceptions.Abort:
+        sys.exit(130)
+    except KeyboardInterrupt:
+        click.echo("massprops: interrupted", err=True)
+        sys.exit(130)
+    except UsageError as exc:
+        say_error(str(exc))
+        sys.exit(2)
+    # The process ends here: freeze what the command left (after simulate, numba's ~10^6
+    # typing and compiled-code objects) so the interpreter's teardown does not collect them one
+    # cycle at a time: ~0.25 s of a ~0.7 s simulate, ~0.03 s frozen. Files are closed already
+    # and stdout is still flushed at exit; the OS takes the memory back.
+    gc.freeze()
+    sys.exit(code if isinstance(code, int) else 0)

@@ -1,0 +1,154 @@
+"""What every command shares: the stderr lines, the error boundary, JSON output, option
+validators and the mesh options of inspect and align (with their translation into the library's
+keyword arguments)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from typing import Any
+
+import click
+
+from massprops.errors import error_message, exit_code
+
+UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")
+"""The keys of massprops.io.UNITS, written out so that building the CLI does not import the
+readers (tests/test_cli.py checks the two agree)."""
+
+
+ELEMENT_FORMATS = ("urdf", "sdf", "mjcf")
+"""The keys of massprops.robot.elements.WRITERS, written out so that ``inspect`` never imports
+the robot package to build its options (tests/test_robot_cli.py checks the two agree)."""
+
+
+INSPECT_FORMATS = ("table", "json", "csv", *ELEMENT_FORMATS)
+"""inspect --format: the human table, one JSON object per line, CSV (massprops.batch.table), the
+robot formats' <inertial> elements."""
+
+
+def say_error(message: str) -> None:
+    click.echo(f"massprops: error: {message}", err=True)
+
+
+def say_warning(name: str, message: str) -> None:
+    click.echo(f"massprops: warning: {name}: {message}", err=True)
+
+
+def say_note(message: str) -> None:
+    """A note on stderr while something slow and one-off happens (never on --json stdout)."""
+    click.echo(f"massprops: {message}", err=True)
+
+
+def guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
+    """Run ``fn``; turn any exception into one stderr line and the contract's exit code (with
+    --debug: its traceback instead of the line, and the same exit code)."""
+    try:
+        fn()
+        return 0
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # ours, a bug or an environment failure: one line, no traceback
+        if ctx.obj.get("debug"):
+            import traceback
+
+            traceback.print_exc()
+            return exit_code(exc)
+        say_error(error_message(exc))
+        return exit_code(exc)
+
+
+def emit_json(obj: dict) -> None:
+    # allow_nan=False: a NaN reaching the output is a bug to surface, never a number to print
+    click.echo(json.dumps(obj, allow_nan=False))
+
+
+def positive(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    import math
+
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise click.BadParameter(f"must be a positive finite number, got {value!r}")
+    return value
+
+
+def non_negative(ctx: click.Context, param: click.Parameter,
+                  value: float | None) -> float | None:
+    import math
+
+    if value is not None and not (math.isfinite(value) and value >= 0):
+        raise click.BadParameter(f"must be a finite number >= 0, got {value!r}")
+    return value
+
+
+def fraction(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    import math
+
+    if value is not None and not (math.isfinite(value) and 0 < value <= 1):
+        raise click.BadParameter(f"must be a fraction in (0, 1], got {value!r}")
+    return value
+
+
+def mass_options(f: Callable) -> Callable:
+    """--density / --mass / --unit / --allow-open / --input-format and the repairs (--union,
+    --shell, --fill-holes, --max-hole), shared by inspect and align."""
+    for opt in reversed([
+        click.option("--density", type=float, callback=positive,
+                     help="Density in kg/m³ (default 1)."),
+        click.option("--mass", "total_mass", type=float, callback=positive,
+                     help="Total mass in kg; the density follows from the volume."),
+        click.option("--unit", type=click.Choice(UNIT_CHOICES), default="m", show_default=True,
+                     help="Unit of the file's coordinates; results are always SI."),
+        click.option("--allow-open", is_flag=True,
+                     help="Compute an open mesh anyway (the result is then ill-defined; "
+                          "warnings say by how much)."),
+        click.option("--input-format", default=None,
+                     help="Format of the input (required for '-' = standard input)."),
+        click.option("--fill-holes", is_flag=True,
+                     help="Cap each hole (boundary loop) with a triangulation that keeps its "
+                          "shape; the error bar covers the choice of cap."),
+        click.option("--max-hole", type=float, callback=fraction, metavar="FRACTION",
+                     help="With --fill-holes: the largest cap accepted, as a fraction of the "
+                          "surface area (default 0.1); larger loops are openings and refused."),
+        click.option("--union", is_flag=True,
+                     help="Replace overlapping or nested pieces by the solid they occupy "
+                          "together (cavities stay empty), instead of counting overlaps twice."),
+        click.option("--shell", type=float, callback=positive, metavar="THICKNESS",
+                     help="The surface as a wall of this thickness, in METRES whatever --unit "
+                          "says (mid-surface model; open and flat surfaces too)."),
+    ]):
+        f = opt(f)
+    return f
+
+
+def check_mass_options(density: float | None, total_mass: float | None) -> None:
+    if density is not None and total_mass is not None:
+        raise click.UsageError("give --density or --mass, not both")
+
+
+def repair_options(fill_holes: bool, max_hole: float | None, union: bool, shell: float | None):
+    """The library's RepairOptions, or None when no repair is asked (nothing imported then)."""
+    if max_hole is not None and not fill_holes:
+        raise click.UsageError("--max-hole applies to --fill-holes; add --fill-holes")
+    if not (fill_holes or union or shell is not None):
+        return None
+    from massprops.repair import RepairOptions
+
+    return RepairOptions(union=union, shell=shell, fill_holes=fill_holes, max_hole=max_hole)
+
+
+_RENAMED = {"total_mass": "mass", "input_format": "format"}
+"""CLI option names that differ from inspect_file's keyword arguments; every other shared mesh
+option reaches inspect_file (and the batch workers) under its own name."""
+
+
+_REPAIR_OPTIONS = ("fill_holes", "max_hole", "union", "shell")
+"""The mesh options inspect_file takes together, as one ``repairs=RepairOptions``."""
+
+
+def inspect_kwargs(mesh_options: dict[str, Any]) -> dict[str, Any]:
+    """inspect_file's keyword arguments from the shared mesh options (`mass_options`)."""
+    options = {_RENAMED.get(k, k): v for k, v in mesh_options.items()
+               if k not in _REPAIR_OPTIONS}
+    check_mass_options(options["density"], options["mass"])
+    options["repairs"] = repair_options(*(mesh_options[k] for k in _REPAIR_OPTIONS))
+    return options

@@ -1,0 +1,201 @@
+"""``massprops simulate`` and ``massprops precision``: a scene's run, and error against run time."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from typing import Any
+
+import click
+
+from massprops.cli.app import cli
+from massprops.cli.common import emit_json, guarded, positive, say_note, say_warning
+
+
+class RegistryChoice(click.ParamType):
+    """A choice whose values come from a registry, loaded on first use, so that building the
+    command line never imports what only one command needs (numba for the integrators)."""
+
+    name = "choice"
+
+    def __init__(self, loader: Callable[[], tuple[str, ...]]) -> None:
+        self.loader = loader
+
+    def get_metavar(self, *args: Any, **kwargs: Any) -> str:
+        return "[" + "|".join(self.loader()) + "]"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> str:
+        choices = self.loader()
+        if value not in choices:
+            self.fail(f"{value!r} is not one of {', '.join(choices)}", param, ctx)
+        return value
+
+
+def _integrator_names() -> tuple[str, ...]:
+    from massprops.dynamics.integrators import integrator_names
+
+    return integrator_names()
+
+
+class _Progress:
+    """Progress bar on stderr, shown only on a terminal, not with --quiet, and only once a run
+    has lasted a second (short runs print nothing)."""
+
+    def __init__(self, enabled: bool) -> None:
+        import time
+
+        self.enabled, self.clock, self.start = enabled, time.monotonic, time.monotonic()
+        self.bar: Any = None
+        self.task: Any = None
+
+    def __call__(self, fraction: float) -> None:
+        if not self.enabled:
+            return
+        if self.bar is None and self.clock() - self.start > 1.0:
+            from rich.console import Console
+            from rich.progress import Progress
+
+            self.bar = Progress(console=Console(stderr=True), transient=True)
+            self.bar.start()
+            self.task = self.bar.add_task("integrating", total=1.0)
+        if self.bar is not None:
+            self.bar.update(self.task, completed=fraction)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
+@cli.command()
+@click.argument("scene_path", metavar="SCENE")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object.")
+@click.option("--output", "output_path", default=None,
+              help="Trajectory file (.csv or .npz); overrides the scene's output.file.")
+@click.option("--integrator", type=RegistryChoice(_integrator_names), default=None,
+              help="Overrides the scene's time.integrator.")
+@click.option("--rtol", type=float, callback=positive, help="Tolerance of adaptive methods.")
+@click.option("--step", type=float, callback=positive, help="Step of fixed-step methods [s].")
+@click.option("--every", type=float, callback=positive, help="Sampling interval [s].")
+@click.option("--plot", "plot_path", default=None,
+              help="PNG of angular velocity, energy and angular-momentum drift over time.")
+@click.option("--force", is_flag=True, help="Replace existing output files.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+@click.option("--max-steps", type=click.IntRange(min=1), default=None,
+              help="Steps a run may take (default 2e7); beyond it the run is refused or "
+                   "stopped, keeping what it computed.")
+@click.pass_context
+def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: str | None,
+             integrator: str | None, rtol: float | None, step: float | None,
+             every: float | None, plot_path: str | None, force: bool, quiet: bool,
+             max_steps: int | None) -> None:
+    """Integrate the Newton-Euler equations of the one body in SCENE (YAML, SI units)."""
+    interrupted = []
+
+    def run() -> None:
+        from massprops.dynamics.compiling import whole_process
+        from massprops.dynamics.scene import load_scene
+        from massprops.dynamics.simulate import simulate as run_scene
+        from massprops.errors import DivergenceError, RunBudgetError
+
+        if plot_path:
+            from massprops.dynamics.plots import require_matplotlib
+
+            require_matplotlib()
+        scene = load_scene(scene_path)
+        for w in scene.warnings:
+            say_warning(scene.body_source, w)
+        for note in scene.notes:  # already placed: "scene.yaml:LINE: ..."
+            click.echo(f"massprops: warning: {note}", err=True)
+        out = output_path or scene.output.file
+        sampling = every or scene.output.every
+        if sampling is None and (out or plot_path):
+            sampling = scene.time.duration / 1000
+        protect = [scene_path, *scene.input_files]
+        progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+        whole_process()
+        try:
+            result = run_scene(scene, integrator=integrator, rtol=rtol, step=step,
+                               every=sampling, progress=progress, notice=say_note,
+                               max_steps=max_steps)
+        except (DivergenceError, RunBudgetError) as exc:  # keep what was computed, exit 3
+            if out and exc.partial is not None:
+                _save(exc.partial, out, None, force, protect)
+            raise
+        finally:
+            progress.close()
+        _save(result, out, plot_path, force, protect)
+        if as_json:
+            emit_json(result.as_dict())
+        else:
+            from massprops.report import print_simulation
+
+            print_simulation(scene, result)
+        if result.interrupted:
+            interrupted.append(True)
+
+    code = guarded(ctx, run)
+    if interrupted and code == 0:
+        click.echo("massprops: interrupted; wrote what was computed", err=True)
+        code = 130
+    ctx.exit(code)
+
+
+@cli.command()
+@click.argument("scene_path", metavar="SCENE")
+@click.option("--json", "as_json", is_flag=True,
+              help="One JSON object: the reference and every run.")
+@click.option("--plot", "plot_path", default=None,
+              help="Work-precision diagram (PNG): error against run time per integrator.")
+@click.option("--integrator", "integrators", multiple=True,
+              type=RegistryChoice(_integrator_names),
+              help="Only these integrators (repeatable); default: every applicable one.")
+@click.option("--force", is_flag=True, help="Replace an existing plot file.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+@click.pass_context
+def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str | None,
+              integrators: tuple[str, ...], force: bool, quiet: bool) -> None:
+    """Error against run time: each applicable integrator over a ladder of tolerances or steps,
+    measured against the exact solution or a much tighter, checked reference run."""
+
+    def run() -> None:
+        from massprops.dynamics.compiling import whole_process
+        from massprops.dynamics.precision import precision as run_ladders
+        from massprops.dynamics.scene import load_scene
+
+        if plot_path:
+            from massprops.dynamics.plots import require_matplotlib
+
+            require_matplotlib()
+        scene = load_scene(scene_path)
+        progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+        whole_process()
+        try:
+            report = run_ladders(scene, integrators=[i for i in integrators if i != "auto"],
+                                 progress=progress, notice=say_note)
+        finally:
+            progress.close()
+        if plot_path:
+            from massprops.dynamics.plots import plot_precision
+
+            plot_precision(report, plot_path, title=scene_path, force=force,
+                           protect=[scene_path, *scene.input_files])
+        if as_json:
+            emit_json(report.as_dict())
+        else:
+            from massprops.report import print_precision
+
+            print_precision(scene_path, report)
+
+    ctx.exit(guarded(ctx, run))
+
+
+def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
+          protect: list) -> None:
+    if trajectory_path:
+        from massprops.dynamics.trajectory import write_trajectory
+
+        write_trajectory(result.trajectory, trajectory_path, force=force, protect=protect)
+    if plot_path:
+        from massprops.dynamics.plots import plot_simulation
+
+        plot_simulation(result, plot_path, force=force, protect=protect)

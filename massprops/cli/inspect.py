@@ -1,0 +1,278 @@
+"""``massprops inspect``: one mesh or a batch of many (local processes or a Dask cluster), printed
+in input order as table, JSON, CSV or a robot format's inertial element."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import click
+
+from massprops.cli.app import cli
+from massprops.cli.common import (
+    ELEMENT_FORMATS,
+    INSPECT_FORMATS,
+    emit_json,
+    guarded,
+    inspect_kwargs,
+    mass_options,
+    say_error,
+    say_warning,
+)
+from massprops.errors import UsageError, exit_code
+
+
+@cli.command()
+@click.argument("meshes", nargs=-1)
+@mass_options
+@click.option("--json", "as_json", is_flag=True,
+              help="One JSON object per mesh, one per line (the same as --format json).")
+@click.option("--format", "output_format", type=click.Choice(INSPECT_FORMATS), default="table",
+              show_default=True,
+              help="table: for people; json (= --json): one object per line; csv: a header and "
+                   "one row per mesh (columns in the README); urdf/sdf/mjcf: the format's "
+                   "<inertial> element per mesh (about the COM, mesh axes, round-trip digits).")
+@click.option("--principal", is_flag=True,
+              help="With --format mjcf: quat + diaginertia instead of fullinertia.")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,
+              help="Worker processes [default: the cores this process may use]. 1: one "
+                   "process, as before; a small batch runs in one process anyway.")
+@click.option("--recursive", "-r", is_flag=True,
+              help="A directory MESH includes its sub-directories.")
+@click.option("--files-from", metavar="FILE", default=None,
+              help="Also inspect the paths listed in FILE, one per line ('-': standard input).")
+@click.option("-0", "--null", is_flag=True,
+              help="The --files-from list is NUL-separated (as find -print0 writes it).")
+@click.option("--scheduler", metavar="ADDRESS", default=None,
+              help="Run on the Dask cluster of this scheduler (pip install 'massprops[dask]'); "
+                   "workers must see the same paths.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary line.")
+@click.pass_context
+def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_format: str,
+            principal: bool, jobs: int | None, recursive: bool, files_from: str | None,
+            null: bool, scheduler: str | None, quiet: bool, **mesh_options: Any) -> None:
+    """Mass, centre of mass, inertia tensor, principal moments and axes of each MESH.
+
+    MESH is a file (OBJ, STL, .vf/.vtx/.fac, PLY, OFF, ...), '-' for standard input, a
+    directory (the mesh files in it; with --recursive, also below), or a quoted glob pattern
+    ('parts/**/*.stl'). Results come in input order; a file that fails is reported and the
+    others go on; the exit code is the worst.
+    """
+    options = inspect_kwargs(mesh_options)
+    if as_json and output_format not in ("table", "json"):
+        raise click.UsageError(f"--json is --format json; give one of --json and --format "
+                               f"{output_format}")
+    if principal and output_format != "mjcf":
+        raise click.UsageError("--principal goes with --format mjcf (quat + diaginertia)")
+    out_format = "json" if as_json else output_format
+    if not meshes and files_from is None:
+        raise click.UsageError("give MESH arguments or --files-from FILE")
+    if "-" in meshes and options["format"] is None:
+        raise click.UsageError("reading standard input ('-') needs --input-format")
+    if "-" in meshes and files_from == "-":
+        raise click.UsageError("'-' and --files-from - both read standard input; give one")
+    if null and files_from is None:
+        raise click.UsageError("-0/--null describes the --files-from list; give --files-from")
+    if scheduler is not None and jobs is not None:
+        raise click.UsageError("--jobs and --scheduler contradict: the cluster's workers run "
+                               "the batch; give one")
+    from massprops.batch import dask_executor, expand_inputs, inspect_many
+    from massprops.batch.inputs import stands_for_many
+
+    inputs = expand_inputs(meshes, recursive=recursive, files_from=files_from, null=null)
+    if files_from is None:  # the whole list is known: the progress bar can count down
+        inputs = list(inputs)
+    summary = not quiet and (sys.stderr.isatty() or files_from is not None
+                             or any(stands_for_many(m) for m in meshes))
+    executor, workers, client = None, None, None
+    if scheduler is not None:
+        try:
+            executor, workers, client = dask_executor(scheduler)
+        except UsageError as exc:  # not installed, or not reachable
+            say_error(str(exc))
+            ctx.exit(exit_code(exc))
+    try:
+        batch = inspect_many(inputs, executor, jobs=jobs, workers=workers, **options)
+        code = _report_batch(ctx, batch, out_format, summary, quiet, principal)
+    finally:
+        if client is not None:
+            client.close()
+        from massprops.batch.pool import end_helper_processes
+
+        end_helper_processes()
+    ctx.exit(code)
+
+
+def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool,
+                  quiet: bool, principal: bool) -> int:
+    """Print every record of ``batch`` as it comes; the worst exit code. Ctrl-C: print what
+    was finished, the summary, and let main() exit 130."""
+    import time
+
+    progress = None
+    if not quiet and sys.stderr.isatty():
+        from massprops.report import BatchProgress
+
+        progress = BatchProgress()
+    start = time.monotonic()
+    counts = {"done": 0, "failed": 0, "worst": 0}
+
+    def show(record: Any) -> None:
+        code = _show_record(ctx, record, out_format, principal)
+        counts["failed" if code else "done"] += 1
+        counts["worst"] = max(counts["worst"], code)
+
+    def say_summary(interrupted: bool) -> None:
+        if progress is not None:
+            progress.close()
+        n = counts["done"] + counts["failed"]
+        if not summary or (n < 2 and not interrupted):  # one file: its own lines say it all
+            return
+        elapsed = time.monotonic() - start
+        rate = f"{n / elapsed:.3g} files/s" if elapsed > 0 else "-"
+        of = f" of {batch.total}" if interrupted and batch.total is not None else (
+            f" of {batch.seen}+" if interrupted else "")
+        click.echo(f"massprops: {n}{of} files in {elapsed:.3g} s ({rate}): "
+                   f"{counts['done']} done, {counts['failed']} failed", err=True)
+
+    ctrl_c = _CtrlC()
+    try:
+        with ctrl_c.deferred():
+            if out_format == "csv":
+                from massprops.batch.table import csv_header
+
+                _to_stdout(lambda: _echo_text(csv_header()))
+        for record in batch:  # Ctrl-C lands here, while waiting for the next record
+            with ctrl_c.deferred():  # ... never half-way through printing one
+                show(record)
+                if progress is not None:
+                    progress.update(counts["done"], counts["failed"], batch.total)
+    except _StdoutClosed:
+        batch.interrupt()
+        _silence_stdout()
+        say_summary(interrupted=True)
+        return max(counts["worst"], 1)  # the output could not be written
+    except KeyboardInterrupt:
+        with ctrl_c.deferred():  # a second Ctrl-C waits until the workers are stopped
+            for record in batch.interrupt():
+                show(record)
+            say_summary(interrupted=True)
+        raise
+    finally:
+        batch.close()
+        ctrl_c.restore()
+        if progress is not None:
+            progress.close()
+    say_summary(interrupted=False)
+    return counts["worst"]
+
+
+class _CtrlC:
+    """Ctrl-C (SIGINT) as KeyboardInterrupt, except inside ``deferred()`` blocks, where it is
+    held until the block ends: a record is printed and counted whole or not taken at all."""
+
+    def __init__(self) -> None:
+        import signal
+        import threading
+
+        self.held = self.holding = False
+        self.previous = None
+        if threading.current_thread() is threading.main_thread():
+            self.previous = signal.signal(signal.SIGINT, self._handler)
+
+    def _handler(self, signum: int, frame: Any) -> None:
+        if self.holding:
+            self.held = True
+        else:
+            raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def deferred(self) -> Iterator[None]:
+        self.holding = True
+        try:
+            yield
+        finally:
+            self.holding = False
+        if self.held:
+            self.held = False
+            raise KeyboardInterrupt
+
+    def restore(self) -> None:
+        if self.previous is not None:
+            import signal
+
+            signal.signal(signal.SIGINT, self.previous)
+            self.previous = None
+
+
+class RemoteError(Exception):
+    """--debug: an input failed in a worker process; the message is the worker's traceback."""
+
+
+def _show_record(ctx: click.Context, record: Any, out_format: str, principal: bool) -> int:
+    """Print one record (warnings and errors on stderr); its exit code."""
+    error = record.error
+    if error is not None:
+        if ctx.obj.get("debug"):
+            raise error.exception or RemoteError(error.traceback or error.message)
+        say_error(error.message)
+        if out_format == "csv":
+            from massprops.batch.table import csv_row
+
+            _to_stdout(lambda: _echo_text(csv_row(record)))
+        return error.exit_code
+
+    def emit() -> None:
+        for w in record.warnings:
+            say_warning(record.file, w)
+        if out_format == "json":
+            _to_stdout(lambda: emit_json(record.data))
+        elif out_format == "csv":
+            from massprops.batch.table import csv_row
+
+            _to_stdout(lambda: _echo_text(csv_row(record)))
+        elif out_format in ELEMENT_FORMATS:
+            from massprops.robot.elements import WRITERS
+
+            d = record.data
+            _to_stdout(lambda: click.echo(f"<!-- {record.file} -->"))
+            element = WRITERS[out_format](d["mass"], d["center_of_mass"], d["inertia"],
+                                          principal=principal)
+            _to_stdout(lambda: click.echo(element))
+        else:
+            from massprops.report import print_inspection
+
+            _to_stdout(lambda: print_inspection(record.data, record.repaired))
+
+    return guarded(ctx, emit)
+
+
+class _StdoutClosed(BaseException):
+    """Standard output was closed by its reader (``... | head``): the batch stops (no error
+    line per remaining file, no work for nobody). A BaseException, so guarded lets it by."""
+
+
+def _to_stdout(write: Callable[[], None]) -> None:
+    try:
+        write()
+    except BrokenPipeError as exc:
+        raise _StdoutClosed from exc
+
+
+def _silence_stdout() -> None:
+    """Point the closed stdout at /dev/null, so that the flush at exit does not fail again."""
+    import os
+
+    with contextlib.suppress(OSError, ValueError, AttributeError):  # no real descriptor
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+
+
+def _echo_text(text: str) -> None:
+    """Text to stdout as is; a file name that is not valid UTF-8 (decoded with surrogate
+    escapes) goes out as its original bytes."""
+    try:
+        click.echo(text, nl=False)
+    except UnicodeEncodeError:
+        click.echo(text.encode("utf-8", "surrogateescape"), nl=False)
