@@ -294,7 +294,7 @@ def _error_estimate(scene, program, spec, setting, traj, others: list[RawRun] | 
     estimate = global_estimate(spec.kind, spec.order, state_error(traj, first, scales),
                                d_companions) + blind
     if unresolved(spec, setting, program):  # a mode all three runs fail alike: measured apart
-        probe = unresolved_mode_error(scene, program, spec, setting, scales)
+        probe = unresolved_mode_error(scene, program, spec, setting, scales, traj.t)
         if not math.isfinite(probe):  # the probe itself failed: the size is unknown
             return None
         estimate = max(estimate, probe)

@@ -15,7 +15,8 @@ def fd_jacobian(y, f0, prog, jac, ytmp, ftmp):
     """jac (n, n) := ∂ẏ/∂y at y by forward differences, f0 = ẏ(y) given; n evaluations.
 
     The increment of component j is sqrt(EPS · max(1e-5, |y_j|)) (Hairer's RADAU5 choice),
-    rounded so that y_j + δ - y_j is exactly δ.
+    rounded so that y_j + δ - y_j is exactly δ. Returns False (jac incomplete) if an increment
+    vanishes or is not finite: y_j beyond ~1e16 or not finite (a diverging Newton iterate).
     """
     n = y.shape[0]
     copy_into(y, ytmp)
@@ -24,10 +25,13 @@ def fd_jacobian(y, f0, prog, jac, ytmp, ftmp):
         d = math.sqrt(EPS * max(1e-5, abs(yj)))
         ytmp[j] = yj + d
         d = ytmp[j] - yj
+        if not (d > 0.0 and d < math.inf):
+            return False
         f(ytmp, prog, ftmp)
         for i in range(n):
             jac[i, j] = (ftmp[i] - f0[i]) / d
         ytmp[j] = yj
+    return True
 
 
 @inner

@@ -104,8 +104,21 @@ VINV = np.linalg.inv(C[:, None] ** np.arange(1, 4))
 """(3, 3): the collocation polynomial y0 + Σ_m Q_m s^m through y0 + Z_j at s = c_j has
 Q = VINV Z."""
 
+AINV = np.linalg.inv(A)
+"""(3, 3) A⁻¹: the collocation equations as Newton solves them, A⁻¹/h Z - F(y + Z) = 0."""
+
 SLOW_RATE = 1e-3
 """Newton converging slower than this (after more than 2 iterations) asks for a new Jacobian."""
+
+STAGE_SLOW = 0.1
+"""With stage Jacobians, a rate above this re-evaluates them at the current iterate."""
+
+STAGE_REFRESHES = 2
+"""Re-evaluations of the stage Jacobians allowed within one attempt of a step."""
+
+RETRY_FIRST, RETRY_MAX = 4, 256
+"""Steps taken with stage Jacobians before the one-Jacobian iteration is tried again: RETRY_FIRST
+after it last worked, doubling (up to RETRY_MAX) each time it fails again."""
 
 
 @inner
@@ -129,6 +142,28 @@ def _factor(jac, h, lr, pr, lc, pc):
 
 
 @inner
+def _factor_stages(y, z, fz, h, prog, big, pb, js, ys, ytmp, ftmp):
+    """big (3n, 3n) := LU factors of A⁻¹/h ⊗ I - diag(J_1, J_2, J_3), J_s = ∂ẏ/∂y at the stage
+    value y + Z_s by forward differences (fz (3, n): ẏ there, given); 3n evaluations. False if
+    a Jacobian or the factorisation fails (a diverging iterate, a singular matrix)."""
+    n = y.shape[0]
+    for s in range(3):
+        for i in range(n):
+            ys[i] = y[i] + z[s, i]
+        if not fd_jacobian(ys, fz[s], prog, js, ytmp, ftmp):
+            return False
+        for r in range(3):
+            for i in range(n):
+                for j in range(n):
+                    big[r * n + i, s * n + j] = 0.0
+                big[r * n + i, s * n + i] = AINV[r, s] / h
+        for i in range(n):
+            for j in range(n):
+                big[s * n + i, s * n + j] -= js[i, j]
+    return lu_factor(big, pb)
+
+
+@inner
 def _guess(z, qpoly, x0, r):
     """Z⁰_j = u(x0 + c_j r) - u(x0) for the collocation polynomial u(x) = Σ_m Q_m x^m of an
     earlier step (x in units of that step, r = this step / that step)."""
@@ -140,18 +175,23 @@ def _guess(z, qpoly, x0, r):
 
 
 @inner
-def _newton(y, h, z, w, fz, prog, lr, pr, lc, pc, rr, rc, tmp, blk, scales, trial, eta):
-    """Simplified Newton iterations on the collocation equations, Z updated in place.
+def _newton(y, h, z, fz, prog, stage, lr, pr, lc, pc, big, pb, rr, rc, dz, js, tmp, tmp2, tmp3,
+            blk, scales, trial, eta):
+    """Newton iterations on the collocation equations A⁻¹/h Z - F(y + Z) = 0, Z (3, n) updated
+    in place from its guess.
+
+    ``stage`` False: simplified Newton with the one Jacobian whose factors ``_factor`` left in
+    lr/lc (Hairer & Wanner's transformed system). True: the stage Jacobians J(y + Z_s) at the
+    guess (`_factor_stages`, into big), re-evaluated at the current iterate when the rate
+    exceeds STAGE_SLOW or the iteration would not converge (at most STAGE_REFRESHES times).
 
     Returns (CONVERGED | DIVERGED | NONFINITE, iterations, rate θ, η for the next step,
-    evaluations).
+    evaluations, Jacobian evaluations).
     """
     n = y.shape[0]
-    for s in range(3):
-        for i in range(n):
-            w[s, i] = TI[s, 0] * z[0, i] + TI[s, 1] * z[1, i] + TI[s, 2] * z[2, i]
     eta = first_eta(eta)
-    theta, norm_old, nfev = 0.0, math.inf, 0
+    theta, norm_old, nfev, njev = 0.0, math.inf, 0, 0
+    refresh, refreshes = stage, 0
     for it in range(MAX_ITER):
         copy_into(scales, trial)
         for s in range(3):
@@ -161,52 +201,67 @@ def _newton(y, h, z, w, fz, prog, lr, pr, lc, pc, rr, rc, tmp, blk, scales, tria
             f(tmp, prog, fz[s])
         nfev += 3
         if not (all_finite(fz[0]) and all_finite(fz[1]) and all_finite(fz[2])):
-            return NONFINITE, it + 1, theta, eta, nfev
-        for i in range(n):
-            g0 = TI[0, 0] * fz[0, i] + TI[0, 1] * fz[1, i] + TI[0, 2] * fz[2, i]
-            g1 = TI[1, 0] * fz[0, i] + TI[1, 1] * fz[1, i] + TI[1, 2] * fz[2, i]
-            g2 = TI[2, 0] * fz[0, i] + TI[2, 1] * fz[1, i] + TI[2, 2] * fz[2, i]
-            rr[i] = g0 - GAMMA / h * w[0, i]
-            rc[i] = g1 - (ALPHA * w[1, i] + L12 * w[2, i]) / h
-            rc[n + i] = g2 - (L21 * w[1, i] + ALPHA * w[2, i]) / h
-        lu_solve(lr, pr, rr)
-        lu_solve(lc, pc, rc)
+            return NONFINITE, it + 1, theta, eta, nfev, njev
+        if refresh:
+            refresh = False
+            nfev += 3 * n
+            njev += 3
+            if not _factor_stages(y, z, fz, h, prog, big, pb, js, tmp, tmp2, tmp3):
+                return DIVERGED, it + 1, theta, eta, nfev, njev
+            norm_old = math.inf  # a new matrix: the last rate says nothing about it
+        for s in range(3):  # dz := -(A⁻¹/h Z - F), the residual
+            for i in range(n):
+                dz[s * n + i] = fz[s, i] - (AINV[s, 0] * z[0, i] + AINV[s, 1] * z[1, i]
+                                            + AINV[s, 2] * z[2, i]) / h
+        if stage:
+            lu_solve(big, pb, dz)
+        else:  # W = T⁻¹ Z splits the system into a real and a complex-pair block
+            for i in range(n):
+                g0, g1, g2 = dz[i], dz[n + i], dz[2 * n + i]
+                rr[i] = TI[0, 0] * g0 + TI[0, 1] * g1 + TI[0, 2] * g2
+                rc[i] = TI[1, 0] * g0 + TI[1, 1] * g1 + TI[1, 2] * g2
+                rc[n + i] = TI[2, 0] * g0 + TI[2, 1] * g1 + TI[2, 2] * g2
+            lu_solve(lr, pr, rr)
+            lu_solve(lc, pc, rc)
+            for s in range(3):
+                for i in range(n):
+                    dz[s * n + i] = T[s, 0] * rr[i] + T[s, 1] * rc[i] + T[s, 2] * rc[n + i]
         dnorm = 0.0
-        for i in range(n):
-            sc = trial[blk[i]]
-            dnorm = max(dnorm, ratio(abs(rr[i]), sc), ratio(abs(rc[i]), sc),
-                        ratio(abs(rc[n + i]), sc))
-            w[0, i] += rr[i]
-            w[1, i] += rc[i]
-            w[2, i] += rc[n + i]
         for s in range(3):
             for i in range(n):
-                z[s, i] = T[s, 0] * w[0, i] + T[s, 1] * w[1, i] + T[s, 2] * w[2, i]
+                dnorm = max(dnorm, ratio(abs(dz[s * n + i]), trial[blk[i]]))
+                z[s, i] += dz[s * n + i]
         state, theta, eta = verdict(it, dnorm, norm_old, eta)
+        if stage and state != CONVERGED and refreshes < STAGE_REFRESHES \
+                and math.isfinite(dnorm) and (state == DIVERGED or theta > STAGE_SLOW) \
+                and it + 1 < MAX_ITER:
+            refresh, refreshes = True, refreshes + 1  # Jacobians at the current iterate
+            continue
         if state != GOING:
-            return state, it + 1, theta, eta, nfev
+            return state, it + 1, theta, eta, nfev, njev
         if math.isfinite(dnorm):
             norm_old = dnorm
-    return DIVERGED, MAX_ITER, theta, eta, nfev
+    return DIVERGED, MAX_ITER, theta, eta, nfev, njev
 
 
 @inlined
-def _richardson(y, h, y_full, qpoly, jac, prog, lr, pr, lc, pc, z, w, fz, rr, rc, tmp, blk,
-                scales, trial, mid, end):
+def _richardson(y, h, y_full, qpoly, prog, lr, pr, lc, pc, big, pb, z, fz, rr, rc, dz, js, tmp,
+                tmp2, tmp3, blk, scales, trial, mid, end):
     """(local error of the step y -> y_full of length h with collocation polynomial ``qpoly``:
-    32/31 of its difference from two half steps, max-norm; evaluations). 0 if a half step does
-    not converge (half steps are easier than the full one that did)."""
-    if not _factor(jac, 0.5 * h, lr, pr, lc, pc):
-        return 0.0, 0
-    nfev = 0
+    32/31 of its difference from two half steps, max-norm; evaluations; Jacobian evaluations).
+    The half steps use stage Jacobians (they work wherever the one-Jacobian iteration does); 0 if
+    one does not converge (half steps are easier than the full one that did)."""
+    nfev, njev = 0, 0
     start = y
     for half in range(2):
         _guess(z, qpoly, 0.5 * half, 0.5)
-        outcome, _, _, _, ev = _newton(start, 0.5 * h, z, w, fz, prog, lr, pr, lc, pc, rr, rc,
-                                       tmp, blk, scales, trial, 1.0)
+        outcome, _, _, _, ev, jev = _newton(start, 0.5 * h, z, fz, prog, True, lr, pr, lc, pc,
+                                            big, pb, rr, rc, dz, js, tmp, tmp2, tmp3, blk,
+                                            scales, trial, 1.0)
         nfev += ev
+        njev += jev
         if outcome != CONVERGED:
-            return 0.0, nfev
+            return 0.0, nfev, njev
         out = mid if half == 0 else end
         for i in range(y.shape[0]):
             out[i] = start[i] + z[2, i]
@@ -215,7 +270,7 @@ def _richardson(y, h, y_full, qpoly, jac, prog, lr, pr, lc, pc, z, w, fz, rr, rc
     d = 0.0
     for i in range(y.shape[0]):
         d = max(d, abs(y_full[i] - end[i]))
-    return 32.0 / 31.0 * d, nfev
+    return 32.0 / 31.0 * d, nfev, njev
 
 
 @inner
@@ -252,13 +307,17 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
     blk = blocks(n)
     scales, trial = np.empty(4), np.empty(4)
     start_scales(y, blk, scales, floors)
-    f0, ynew, y_last, tmp, tmp2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    jac, lr, pr = np.empty((n, n)), np.empty((n, n)), np.empty(n, dtype=np.int64)
+    f0, ynew, y_last = np.empty(n), np.empty(n), np.empty(n)
+    tmp, tmp2, tmp3 = np.empty(n), np.empty(n), np.empty(n)
+    jac, js, lr, pr = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), \
+        np.empty(n, dtype=np.int64)
     lc, pc = np.empty((2 * n, 2 * n)), np.empty(2 * n, dtype=np.int64)
-    z, w, fz, qpoly = np.empty((3, n)), np.empty((3, n)), np.empty((3, n)), np.zeros((3, n))
-    rr, rc = np.empty(n), np.empty(2 * n)
+    big, pb = np.empty((3 * n, 3 * n)), np.empty(3 * n, dtype=np.int64)
+    z, fz, qpoly = np.empty((3, n)), np.empty((3, n)), np.zeros((3, n))
+    rr, rc, dz = np.empty(n), np.empty(2 * n), np.empty(3 * n)
     fresh, h_lu, h_prev, h_last = False, 0.0, big_h, big_h
     eta, t, status, level, streak = 1.0, t0, 0, 0, 0
+    stage, trying, calm, retry = False, False, 0, RETRY_FIRST
     for step in range(m):
         tb = t1 if step == m - 1 else t0 + (step + 1) * big_h
         hs = big_h * 0.5 ** level
@@ -268,30 +327,41 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
                 status = STATUS_STEP_LIMIT
                 break
             h, t_next = piece(t, tb, hs)
-            if not fresh and h_lu == 0.0:
+            if not stage and not fresh and h_lu == 0.0:
                 f(y, prog, f0)
                 stats[NFEV] += 1
                 if not all_finite(f0):
                     status = STATUS_NONFINITE
                     break
-                fd_jacobian(y, f0, prog, jac, tmp, tmp2)
                 stats[NJEV] += 1
                 stats[NFEV] += n
+                if not fd_jacobian(y, f0, prog, jac, tmp, tmp2):  # a state beyond 1e16
+                    status = STATUS_NONFINITE
+                    break
                 fresh = True
             factored = True
-            if h != h_lu:
+            if not stage and h != h_lu:
                 factored = _factor(jac, h, lr, pr, lc, pc)
                 h_lu = h if factored else 0.0
             outcome, iters, theta = DIVERGED, 0, 0.0
             if factored:
                 _guess(z, qpoly, 1.0, h / h_prev)  # qpoly is 0 before the first step
-                outcome, iters, theta, eta, ev = _newton(y, h, z, w, fz, prog, lr, pr, lc, pc,
-                                                         rr, rc, tmp, blk, scales, trial, eta)
+                outcome, iters, theta, eta, ev, jev = _newton(
+                    y, h, z, fz, prog, stage, lr, pr, lc, pc, big, pb, rr, rc, dz, js, tmp,
+                    tmp2, tmp3, blk, scales, trial, eta)
                 stats[NFEV] += ev
+                stats[NJEV] += jev
             if outcome != CONVERGED:
                 stats[REJECTED] += 1
-                if not fresh:  # a stale Jacobian may be the cause: refresh it, same step
-                    h_lu = 0.0
+                if not stage:
+                    if not fresh:  # a stale Jacobian may be the cause: refresh it, same step
+                        h_lu = 0.0
+                        continue
+                    # J at the piece's start is not enough (it turns within the step): the
+                    # same piece with stage Jacobians, for a while
+                    stage, calm, eta = True, 0, 1.0  # the other iteration's rate says nothing
+                    if trying:
+                        retry, trying = min(2 * retry, RETRY_MAX), False
                     continue
                 hs, level, clean = 0.5 * h, level + 1, False
                 if too_small(hs, t, t0, t1):
@@ -311,8 +381,15 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
             t = t_next
             stats[STEPS] += 1
             h_prev, h_last, fresh = h, h, False
-            if iters > 2 and theta > SLOW_RATE:
-                h_lu = 0.0  # converging slowly: a new Jacobian at the next step's start
+            if stage:
+                calm += 1
+                if calm >= retry:  # try the one-Jacobian iteration again, with a fresh J
+                    stage, trying, h_lu, eta = False, True, 0.0, 1.0
+            else:
+                if trying:
+                    retry, trying = RETRY_FIRST, False
+                if iters > 2 and theta > SLOW_RATE:
+                    h_lu = 0.0  # converging slowly: a new Jacobian at the next step's start
         if status != 0:
             break
         streak = streak + 1 if clean else 0
@@ -322,9 +399,10 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
         stats[STATUS] = status
         fill_nan(y_out, kout)
         return 0.0, t
-    local, ev = _richardson(y_last, h_last, y, qpoly, jac, prog, lr, pr, lc, pc, z, w, fz, rr,
-                            rc, tmp, blk, scales, trial, tmp2, ynew)
+    local, ev, jev = _richardson(y_last, h_last, y, qpoly, prog, lr, pr, lc, pc, big, pb, z, fz,
+                                 rr, rc, dz, js, tmp, tmp2, tmp3, blk, scales, trial, f0, ynew)
     stats[NFEV] += ev
+    stats[NJEV] += jev
     return (local * m if math.isfinite(local) else 0.0), t
 
 
