@@ -5,10 +5,14 @@ cache, best of --warm), and the first `precision` (which compiles every integrat
 Targets (issue 8): the first simulate of any sample scene <= 3 s, the first exact run <= 1 s,
 warm runs no slower than before. `--tree DIR` runs another checkout (e.g. the commit before this
 work, exported with `git archive`) the same way, side by side, so the numbers compare on the same
-machine at the same load:
+machine at the same load. A source tree has no prebuilt kernels, so its cold runs compile; a
+fresh machine's first run is measured with `--python`, the interpreter of an environment where
+massprops was installed with `pip install .` (the kernels compiled into the wheel): its cold
+runs start from an empty home cache (XDG_CACHE_HOME), NUMBA_CACHE_DIR unset, as a new user's:
 
     python benchmarks/bench_first_run.py [--scenes dzhanibekov,needle] [--warm 3]
-        [--tree /tmp/before] [--precision needle] [--no-precision]
+        [--tree /tmp/before] [--python /tmp/venv/bin/python] [--precision needle]
+        [--no-precision]
 
 Printed per scene: the integrator auto (or the scene) picks, cold and warm wall seconds of each
 tree, and whether the notice line appeared on stderr (it must on a cold run that compiles, never
@@ -37,12 +41,20 @@ FIRST_TARGET_S, EXACT_TARGET_S = 3.0, 1.0
 def run_process(tree: Path, args: list[str], cache: Path
                 ) -> tuple[float, float, subprocess.CompletedProcess]:
     """Wall and CPU (user + system, the process and the helpers it waited for) seconds and the
-    result of ``python -m massprops ARGS`` importing massprops from ``tree``, numba's cache in
-    ``cache``. CPU seconds are less sensitive than wall seconds to other jobs on the machine."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(tree))
+    result of ``python -m massprops ARGS``: importing massprops from ``tree`` with numba's cache
+    in ``cache``, or, for ``tree`` a Python executable, its installed massprops with ``cache`` as
+    the home cache. CPU seconds are less sensitive than wall seconds to other jobs."""
+    if tree.is_file():
+        python, cwd = str(tree), cache
+        env = dict(os.environ, XDG_CACHE_HOME=str(cache))
+        env.pop("NUMBA_CACHE_DIR", None)
+        env.pop("PYTHONPATH", None)
+    else:
+        python, cwd = sys.executable, tree
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(tree))
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "massprops", *args], cwd=tree, env=env,
+    proc = subprocess.run([python, "-m", "massprops", *args], cwd=cwd, env=env,
                           capture_output=True, text=True)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -82,12 +94,16 @@ def main() -> None:
     ap.add_argument("--scenes", default="", help="comma-separated names (default: all)")
     ap.add_argument("--warm", type=int, default=3)
     ap.add_argument("--tree", default=None, help="another checkout to measure side by side")
+    ap.add_argument("--python", default=None,
+                    help="the interpreter of an environment with massprops installed")
     ap.add_argument("--precision", default="needle", help="scene of the first-precision run")
     ap.add_argument("--no-precision", action="store_true")
     args = ap.parse_args()
     names = [n for n in args.scenes.split(",") if n] or sorted(
         p.stem for p in SCENES.glob("*.yaml"))
     trees = {"this": ROOT} | ({"other": Path(args.tree).resolve()} if args.tree else {})
+    if args.python:  # the installed package is the one a user meets: it leads
+        trees = {"installed": Path(args.python).absolute()} | trees
     print(f"{'scene':18s} {'integrator':11s} " + " ".join(
         f"{label + ' cold (cpu)':>17s} {label + ' warm':>10s}" for label in trees) + "  notes")
     worst_first, worst_exact = 0.0, 0.0
@@ -97,7 +113,7 @@ def main() -> None:
         for label, tree in trees.items():
             m = measure(tree, ["simulate", scene, "--json", "--quiet"], args.warm)
             cells.append(f"{m['cold']:8.2f} ({m['cold_cpu']:5.2f}) {m['warm']:10.2f}")
-            if label == "this":
+            if label == next(iter(trees)):
                 integrator = m["integrator"]
                 worst_first = max(worst_first, m["cold"])
                 if integrator == "exact":

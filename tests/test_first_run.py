@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 
@@ -31,15 +32,16 @@ try:
     main(sys.argv[1:])
 except SystemExit as exc:
     code = exc.code
-print(json.dumps({"exit": code, "numba": "numba" in sys.modules,
+import massprops
+print(json.dumps({"exit": code, "file": massprops.__file__, "numba": "numba" in sys.modules,
                   "scipy_special": "scipy.special" in sys.modules}), file=sys.stderr)
 """
 
 
-def fresh_process(cache, *args) -> tuple[str, list[str], dict]:
+def fresh_process(cache, *args, env=None, cwd=ROOT) -> tuple[str, list[str], dict]:
     """(stdout, stderr lines but the probe's, probe) of the CLI in a new process."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
-    out = subprocess.run([sys.executable, "-c", CLI, *map(str, args)], cwd=ROOT, env=env,
+    env = env or dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    out = subprocess.run([sys.executable, "-c", CLI, *map(str, args)], cwd=cwd, env=env,
                          capture_output=True, text=True, timeout=300)
     lines = out.stderr.strip().splitlines()
     return out.stdout, lines[:-1], json.loads(lines[-1])
@@ -49,7 +51,8 @@ def test_an_exact_run_imports_neither_numba_nor_scipy_special(tmp_path):
     path = tmp_path / "free.yaml"
     path.write_text(EXACT_SCENE)
     stdout, errors, probe = fresh_process(tmp_path / "cache", "simulate", path, "--json", "-q")
-    assert probe == {"exit": 0, "numba": False, "scipy_special": False}
+    assert probe | {"file": None} == {"exit": 0, "file": None, "numba": False,
+                                      "scipy_special": False}
     assert errors == []  # nothing compiled, nothing said
     result = json.loads(stdout)
     assert result["integrator"] == "exact" and result["steps"] == 0
@@ -114,7 +117,38 @@ def test_a_held_body_in_closed_form_needs_no_compiler(tmp_path):
     over the samples: nothing compiled, numba not even imported, nothing said."""
     stdout, errors, probe = fresh_process(tmp_path / "cache", "simulate",
                                           ROOT / "sample_scenes" / "heavy_top.yaml", "--json", "-q")
-    assert probe == {"exit": 0, "numba": False, "scipy_special": False}, errors
+    assert probe | {"file": None} == {"exit": 0, "file": None, "numba": False,
+                                      "scipy_special": False}, errors
     assert errors == []
     result = json.loads(stdout)
     assert result["integrator"] == "exact" and len(result["final"]["joints"]) == 1
+
+
+@pytest.mark.timeout(300)
+def test_kernels_built_with_the_package_load_without_compiling_wherever_it_is_installed(
+        tmp_path, run):
+    """What setup.py does to a wheel: the kernels compiled in the build folder, then the package
+    moved to another absolute path (site-packages), and a first run with massprops' own cache
+    folder in a fresh home: it loads them (numba compiles nothing, so nothing is said) and
+    gives the same motion as this process's own kernel."""
+    ignore = shutil.ignore_patterns("__pycache__", "_prebuilt")
+    shutil.copytree(ROOT / "massprops", tmp_path / "build" / "massprops", ignore=ignore)
+    env = dict(os.environ, PYTHONPATH=str(tmp_path / "build"),
+               NUMBA_CACHE_DIR=str(tmp_path / "scratch"))
+    subprocess.run([sys.executable, "-m", "massprops.dynamics.prebuilt", "--only", "rk4"],
+                   cwd=tmp_path, env=env, check=True, capture_output=True, timeout=240)
+    shutil.copytree(tmp_path / "build" / "massprops", tmp_path / "site" / "massprops")
+    scene = tmp_path / "torqued.yaml"
+    scene.write_text(RK4_SCENE)
+
+    env = dict(os.environ, PYTHONPATH=str(tmp_path / "site"), XDG_CACHE_HOME=str(tmp_path / "home"))
+    env.pop("NUMBA_CACHE_DIR", None)
+    stdout, errors, probe = fresh_process(None, "simulate", scene, "--json", "-q", env=env,
+                                          cwd=tmp_path)
+    assert probe["file"].startswith(str(tmp_path / "site"))
+    assert probe["exit"] == 0 and probe["numba"] is True
+    assert errors == []  # loaded: numba compiled nothing
+    (cache,) = (tmp_path / "home" / "massprops").iterdir()
+    assert (cache / ".prebuilt-seeded").exists()
+    here = run("simulate", scene, "--json", "-q")
+    assert json.loads(stdout)["final"] == json.loads(here.stdout)["final"]

@@ -3,7 +3,9 @@
 Importing this package points numba's on-disk cache at a folder keyed by a hash of this
 package's sources. numba checks a cached kernel only against its own file, so a kernel that
 calls a changed function in another file (``forces.rhs``) would otherwise keep running stale
-machine code after an edit or an upgrade. Nothing here imports numba itself.
+machine code after an edit or an upgrade. That folder (`MANAGED_CACHE`) is the one the kernels
+shipped with the package are copied into (``prebuilt``); a NUMBA_CACHE_DIR the user set is used
+as it is. Nothing here imports numba itself.
 """
 
 from __future__ import annotations
@@ -14,8 +16,12 @@ import sys
 import tempfile
 from pathlib import Path
 
+MANAGED_CACHE: Path | None = None
+"""numba's cache folder when massprops chose it (None: the user's NUMBA_CACHE_DIR)."""
+
 
 def _configure_numba_cache() -> None:
+    global MANAGED_CACHE
     if "NUMBA_CACHE_DIR" in os.environ:  # the user's choice wins
         return
     here = Path(__file__).resolve().parent
@@ -35,6 +41,7 @@ def _configure_numba_cache() -> None:
         target = Path(tempfile.gettempdir()) / f"massprops-numba-{digest.hexdigest()[:16]}"
         target.mkdir(parents=True, exist_ok=True)
     os.environ["NUMBA_CACHE_DIR"] = str(target)
+    MANAGED_CACHE = target
     if "numba" in sys.modules:  # imported before us: make it re-read its settings
         sys.modules["numba"].config.reload_config()
 

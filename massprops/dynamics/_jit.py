@@ -29,7 +29,11 @@ import sys
 from numba import njit
 from numba.extending import overload, register_jitable
 
-from massprops.dynamics import _elementwise, elliptic, exact, forces  # noqa: F401  (registered)
+from massprops.dynamics import MANAGED_CACHE, _elementwise, elliptic, exact, forces  # noqa: F401
+from massprops.dynamics.prebuilt import seed
+
+if MANAGED_CACHE is not None:  # before any kernel looks for its cached code
+    seed(MANAGED_CACHE)
 
 jit = njit(cache=True)
 """Decorator: a compiled helper that Python may also call (uses only floats, ints, tuples,

@@ -1,0 +1,143 @@
+"""Kernels compiled when the package is built and shipped inside it, so that the first run on the
+machine that installed it loads them from disk instead of compiling (a few seconds per kernel).
+
+numba keeps the machine code of a function in ``NUMBA_CACHE_DIR/<folder>_<sha1 of the folder's
+absolute path>/``. At build time (setup.py's build step, `build`), every stepping kernel is
+compiled in the package being built into a scratch cache, and its files are stored under
+``_prebuilt/<folder relative to the package>/`` with a manifest of the numba, numpy and Python
+that made them. At run time `seed` copies them once into the cache folder numba will look in
+for the installed files (only a folder massprops manages: a NUMBA_CACHE_DIR the user chose is
+left as it is).
+
+Validity is numba's, not ours: numba uses a cached entry only when its index matches the numba
+version, the source file's content hash, the function's bytecode and this CPU (target triple,
+CPU name and features). A wheel built on another machine or with another numba leaves entries
+numba does not use, and the first run compiles as it would have (with its notice). The manifest
+only avoids copying files numba would ignore.
+
+    python -m massprops.dynamics.prebuilt [--only rk4,dop853]    # run with the package to fill
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parent.parent
+"""The folder of the `massprops` package these kernels belong to."""
+
+FOLDER = Path(__file__).resolve().parent / "_prebuilt"
+MANIFEST = "manifest.json"
+MARKER = ".prebuilt-seeded"
+"""Left in a cache folder once `seed` has looked at it (copied or not): it never copies twice,
+so kernels a user deletes are compiled, not restored."""
+
+
+def made_with() -> dict:
+    """The versions a prebuilt cache is tied to (more than numba checks: numpy's ABI too)."""
+    import numba
+    import numpy as np
+
+    return {"numba": numba.__version__, "numpy": np.__version__.rsplit(".", 1)[0],
+            "python": sys.version.split()[0]}
+
+
+def _cache_subpath(folder: Path) -> str:
+    """numba's name for the cache folder of the sources in ``folder`` (its own rule)."""
+    from numba.core.caching import _CacheLocator
+
+    return _CacheLocator.get_suitable_cache_subpath(str(folder / "__init__.py"))
+
+
+def build(names: list[str] | None = None, jobs: int = 2) -> int:
+    """Compile the kernels of the integrators ``names`` (default: every stepping one) of the
+    package this module is in and store them in `FOLDER`; returns the number of files.
+    ``jobs`` processes compile side by side (one kernel is one process's work)."""
+    from massprops.dynamics import compiling
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    kernels = compiling.compiled_names(names or list(INTEGRATORS))
+    scratch = Path(tempfile.mkdtemp(prefix="massprops-prebuild-"))
+    try:
+        shares = [kernels[i::jobs] for i in range(jobs)]
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(scratch),
+                   PYTHONPATH=os.pathsep.join([str(PACKAGE.parent),
+                                               os.environ.get("PYTHONPATH", "")]))
+        code = ("import sys; from massprops.dynamics.compiling import helper_main; "
+                "helper_main(sys.argv[1:])")
+        procs = [subprocess.Popen([sys.executable, "-c", code, *share], env=env, cwd=PACKAGE.parent)
+                 for share in shares if share]
+        if any(p.wait() != 0 for p in procs):
+            raise RuntimeError("compiling a kernel failed")
+        shutil.rmtree(FOLDER, ignore_errors=True)
+        folders = {_cache_subpath(d): d.relative_to(PACKAGE).as_posix()
+                   for d in {p.parent for p in PACKAGE.rglob("*.py")}}
+        count, stored = 0, []
+        for cached in scratch.iterdir():
+            rel = folders.get(cached.name)
+            if rel is None:  # compiled code of a file outside the package: not ours to ship
+                continue
+            shutil.copytree(cached, FOLDER / rel)
+            stored.append(rel)
+            count += sum(1 for _ in cached.iterdir())
+        (FOLDER / MANIFEST).write_text(json.dumps(made_with() | {"folders": sorted(stored)}))
+        return count
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def seed(cache: Path) -> int:
+    """Copy the shipped kernels into numba's cache folder ``cache`` unless it was seeded before
+    or they were made with other versions; returns the number of files copied. Never raises
+    for want of files or permissions: the kernels are then compiled on first use."""
+    marker = cache / MARKER
+    try:
+        if marker.exists():
+            return 0
+        manifest = json.loads((FOLDER / MANIFEST).read_text())
+    except (OSError, ValueError):
+        return 0
+    count = 0
+    try:
+        folders = manifest.pop("folders")
+        if manifest == made_with():
+            for rel in folders:
+                count += _copy_missing(FOLDER / rel, cache / _cache_subpath(PACKAGE / rel))
+        marker.touch()
+    except (OSError, ImportError, KeyError, TypeError):
+        pass
+    return count
+
+
+def _copy_missing(source: Path, target: Path) -> int:
+    """Copy the files of ``source`` that ``target`` lacks, each atomically; data files before
+    indexes, so that a process reading concurrently never sees an index without its data."""
+    target.mkdir(parents=True, exist_ok=True)
+    count = 0
+    for path in sorted(source.iterdir(), key=lambda p: p.suffix == ".nbi"):
+        final = target / path.name
+        if final.exists():
+            continue
+        partial = target / f".{path.name}.{os.getpid()}.part"
+        shutil.copyfile(path, partial)
+        os.replace(partial, final)
+        count += 1
+    return count
+
+
+def main(argv: list[str]) -> None:
+    names = None
+    if argv[:1] == ["--only"] and len(argv) == 2:
+        names = argv[1].split(",")
+    elif argv:
+        sys.exit("usage: python -m massprops.dynamics.prebuilt [--only rk4,dop853]")
+    print(f"massprops: prebuilt {build(names)} kernel cache files into {FOLDER}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
