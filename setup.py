@@ -8,6 +8,7 @@ are then compiled on first use, as numba does by default).
 """
 
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -19,9 +20,12 @@ from setuptools.command.build_py import build_py
 class BuildWithKernels(build_py):
     def run(self):
         super().run()
+        build_lib = os.path.abspath(self.build_lib)
+        # never ship kernels of an earlier build left in the reused build folder
+        shutil.rmtree(os.path.join(build_lib, "massprops", "dynamics", "_prebuilt"),
+                      ignore_errors=True)
         if self.editable_mode or os.environ.get("MASSPROPS_PREBUILD") == "0":
             return
-        build_lib = os.path.abspath(self.build_lib)
         env = dict(os.environ, PYTHONPATH=os.pathsep.join(
             p for p in (build_lib, os.environ.get("PYTHONPATH")) if p))
         try:

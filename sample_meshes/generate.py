@@ -55,7 +55,8 @@ def tetrahedron() -> Mesh:
 
 
 def hexagonal_prism(n: int = 6, radius: float = 1.0, height: float = 2.0) -> Mesh:
-    """Regular n-gon prism: circumradius ``radius`` in the xy-plane, z in [-h/2, h/2]; n-gon caps."""
+    """Regular n-gon prism: circumradius ``radius`` in the xy-plane, z in [-h/2, h/2], n-gon
+    caps."""
     ang = 2 * np.pi * np.arange(n) / n
     ring = np.stack([radius * np.cos(ang), radius * np.sin(ang)], axis=1)
     v = np.vstack([np.column_stack([ring, np.full(n, -height / 2)]),
