@@ -1,7 +1,7 @@
 """Build step of massprops (the metadata is in pyproject.toml): after the sources are copied into
 the build folder, the dynamics kernels are compiled there and shipped in the wheel, so that the
 first `massprops simulate` on this machine loads them instead of compiling for seconds
-(massprops/dynamics/prebuilt.py says how and why it stays correct on another machine).
+(massprops/dynamics/compiled/prebuilt.py says how and why it stays correct on another machine).
 
 MASSPROPS_PREBUILD=0 skips it; an editable install and a failed compile skip it too (the kernels
 are then compiled on first use, as numba does by default).
@@ -22,7 +22,7 @@ class BuildWithKernels(build_py):
         super().run()
         build_lib = os.path.abspath(self.build_lib)
         # never ship kernels of an earlier build left in the reused build folder
-        shutil.rmtree(os.path.join(build_lib, "massprops", "dynamics", "_prebuilt"),
+        shutil.rmtree(os.path.join(build_lib, "massprops", "dynamics", "compiled", "_prebuilt"),
                       ignore_errors=True)
         if self.editable_mode or os.environ.get("MASSPROPS_PREBUILD") == "0":
             return
@@ -31,8 +31,8 @@ class BuildWithKernels(build_py):
         try:
             with tempfile.TemporaryDirectory() as scratch:  # keeps the builder's home untouched
                 env["NUMBA_CACHE_DIR"] = scratch
-                subprocess.run([sys.executable, "-m", "massprops.dynamics.prebuilt"], env=env,
-                               cwd=build_lib, check=True, timeout=1800)
+                subprocess.run([sys.executable, "-m", "massprops.dynamics.compiled.prebuilt"],
+                               env=env, cwd=build_lib, check=True, timeout=1800)
         except (OSError, subprocess.SubprocessError) as exc:
             print(f"massprops: kernels not prebuilt ({exc}); the first run compiles them",
                   file=sys.stderr)

@@ -84,7 +84,7 @@ def reference(scene_path: str, cache: Path | None, samples: int):
 def measure(scene_path: str, factors: list[float], samples: int, reference_file: str) -> list:
     """One process: every factor once (compiled warm first), error against the cached truth."""
     from massprops.dynamics.accuracy import Scales, state_error
-    from massprops.dynamics.compiling import prepare
+    from massprops.dynamics.compiled.compiling import prepare
     from massprops.dynamics.forces import compile_forces
     from massprops.dynamics.integrators import INTEGRATORS
     from massprops.dynamics.runner import run_once

@@ -14,7 +14,7 @@ import sys
 import pytest
 from conftest import ROOT
 
-from massprops.dynamics import compiling
+from massprops.dynamics.compiled import compiling
 
 EXACT_SCENE = ("body: {mass: 1, inertia: [[1, 0, 0], [0, 2, 0], [0, 0, 3]]}\n"
                "initial: {angular_velocity: [0.3, 5.0, 0.2]}\n"
@@ -135,7 +135,7 @@ def test_kernels_built_with_the_package_load_without_compiling_wherever_it_is_in
     shutil.copytree(ROOT / "massprops", tmp_path / "build" / "massprops", ignore=ignore)
     env = dict(os.environ, PYTHONPATH=str(tmp_path / "build"),
                NUMBA_CACHE_DIR=str(tmp_path / "scratch"))
-    subprocess.run([sys.executable, "-m", "massprops.dynamics.prebuilt", "--only", "rk4"],
+    subprocess.run([sys.executable, "-m", "massprops.dynamics.compiled.prebuilt", "--only", "rk4"],
                    cwd=tmp_path, env=env, check=True, capture_output=True, timeout=240)
     shutil.copytree(tmp_path / "build" / "massprops", tmp_path / "site" / "massprops")
     scene = tmp_path / "torqued.yaml"

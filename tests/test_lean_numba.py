@@ -1,4 +1,4 @@
-"""The CLI starts numba without its cffi support and BLAS probe (massprops.dynamics._jit
+"""The CLI starts numba without its cffi support and BLAS probe (massprops.dynamics.compiled.jit
 .start_numba_lean); a library import keeps full numba. Each case runs in a fresh process, the
 only place where numba's start can be observed."""
 

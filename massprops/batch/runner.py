@@ -296,8 +296,9 @@ class Batch(Iterator[MeshResult]):
         except BrokenExecutor:
             if not self._own_pool:
                 raise
-            self._replace_pool()
-            slot.future = self._executor.submit(run_chunk, *args)
+            self._replace_pool()  # a new pool, or none (workers cannot start): this process
+            self._submit(slot)
+            return
         except Exception as exc:  # shut down, or cannot start workers: the task fails below
             slot.future = Future()
             slot.future.set_exception(exc)

@@ -92,7 +92,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
     interrupted = []
 
     def run() -> None:
-        from massprops.dynamics.compiling import whole_process
+        from massprops.dynamics.compiled.compiling import whole_process
         from massprops.dynamics.scene import load_scene
         from massprops.dynamics.simulate import simulate as run_scene
         from massprops.errors import DivergenceError, RunBudgetError
@@ -158,7 +158,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
     measured against the exact solution or a much tighter, checked reference run."""
 
     def run() -> None:
-        from massprops.dynamics.compiling import whole_process
+        from massprops.dynamics.compiled.compiling import whole_process
         from massprops.dynamics.precision import precision as run_ladders
         from massprops.dynamics.scene import load_scene
 

@@ -17,9 +17,9 @@ loops. Its formulas are written once, as plain Python over numpy that works elem
   `ldexp`), and a choice between expensive branches (transcendental functions) has a scalar form
   with a real ``if`` (`scalar_form`), so compiled code never evaluates the branch it skips.
 
-``massprops.dynamics._jit`` (the only module that imports numba) registers every function marked
-`elementwise` with numba (``register_jitable``) and gives each helper its scalar form, so a
-compiled kernel that calls ``jacobi_reduced`` compiles this very source for floats.
+``massprops.dynamics.compiled.jit`` (the only module that imports numba) registers every
+function marked `elementwise` with numba (``register_jitable``) and gives each helper its scalar
+form, so a compiled kernel that calls ``jacobi_reduced`` compiles this very source for floats.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from collections.abc import Callable
 import numpy as np
 
 FUNCTIONS: list[Callable] = []
-"""The functions marked `elementwise`, in definition order (``_jit`` registers them with numba)."""
+"""The functions marked `elementwise`, in definition order (``compiled.jit`` registers them)."""
 
 SCALAR_FORMS: dict[Callable, Callable] = {}
 """numpy helper -> the function numba compiles in its place for float arguments."""

@@ -156,7 +156,7 @@ def compile_forces(scene: Scene) -> ForceProgram:
 
 
 # --- the right-hand side: plain Python that compiled kernels compile where they call it ----------
-# (massprops.dynamics._jit registers these three with numba; this module imports no numba)
+# (massprops.dynamics.compiled.jit registers these three with numba; this module imports no numba)
 def quat_matrix(q0, q1, q2, q3):
     """Rotation matrix entries (row-major 9-tuple) of the unit quaternion [q0, q1, q2, q3]."""
     return (1 - 2 * (q2 * q2 + q3 * q3), 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2),

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.dynamics.accuracy import Scales, exact_roundoff, global_estimate, state_error
-from massprops.dynamics.compiling import prepare
+from massprops.dynamics.compiled.compiling import prepare
 from massprops.dynamics.forces import ForceProgram, compile_forces
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.model import Scene
@@ -108,7 +108,7 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
     """Run the ladders of ``integrators`` (default: every applicable one) on ``scene``.
 
     notice(text) is called once if compiled kernels are missing from numba's cache and are being
-    compiled (all of them are made ready first: massprops.dynamics.compiling.prepare)."""
+    compiled (all of them are made ready first: massprops.dynamics.compiled.compiling.prepare)."""
     from massprops.dynamics.integrators import INTEGRATORS
 
     program = compile_forces(scene)

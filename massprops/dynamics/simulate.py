@@ -18,7 +18,7 @@ from massprops.dynamics.accuracy import (
     state_error,
 )
 from massprops.dynamics.budget import check_fixed_steps, check_samples
-from massprops.dynamics.compiling import prepare
+from massprops.dynamics.compiled.compiling import prepare
 from massprops.dynamics.forces import (
     DRAG,
     FORCE_BODY,
@@ -227,10 +227,10 @@ def _start_companions(scene: Scene, program: ForceProgram, spec, setting: float,
                       ) -> CancellableJob | None:
     """The companion runs of the error estimate (accuracy.companion_settings), one after the
     other on a helper thread, or None for a method that needs none. They run while the main run
-    does: the kernels release the GIL (_jit.kernel), so on two cores the estimate adds little
-    wall time to the main run (a fixed step's 2h and 4h companions cost 3/4 of it, dop853's at
-    rtol / 20 ~1.45 times). Every run is deterministic in its own arrays: the numbers are
-    bit-identical to running them all one after the other."""
+    does: the kernels release the GIL (compiled.jit.kernel), so on two cores the estimate adds
+    little wall time to the main run (a fixed step's 2h and 4h companions cost 3/4 of it,
+    dop853's at rtol / 20 ~1.45 times). Every run is deterministic in its own arrays: the numbers
+    are bit-identical to running them all one after the other."""
     settings = companion_settings(spec.kind, setting)
     if not settings:
         return None

@@ -44,7 +44,7 @@ with one ``SPEC`` and one entry in ``_BUILT_IN`` below, or calls `register`):
 7. ``err`` : float, the segment's accumulated local error estimate: max-norm in absolute units of
    the state, summed over the steps. Each module's docstring says how it is estimated. The
    global error estimate is the caller's job. On failure it covers the steps taken (possibly 0).
-8. All stepping happens inside one numba-compiled function per method (``_jit.kernel``): one
+8. All stepping happens inside one numba-compiled function per method (``compiled.jit.kernel``): one
    Python call per segment, never per step; work arrays are allocated once per segment. No
    array-to-slice assignment in compiled code (``_shared.copy_into``): it compiles numba's
    shape-error message machinery, seconds of every first compile.
@@ -64,9 +64,10 @@ not depend on t; simulate offers it only for torque-free scenes with constant fo
 Caching: numba's on-disk cache is keyed on each kernel's own source file only; importing
 ``massprops.dynamics`` therefore points it at a folder named by a hash of all the dynamics
 sources, so an edit or upgrade of a file a kernel calls into recompiles instead of running stale
-code. A fresh machine compiles a method's kernel once, on first use (2-10 s of one core;
-``massprops.dynamics.compiling`` gets them ready before a run and says so); later runs load them
-in well under a second.
+code. The kernels are compiled when the package is built (``dynamics.compiled.prebuilt``);
+where none fits, a method's kernel is compiled once, on first use (2-10 s of one core;
+``dynamics.compiled.compiling`` gets them ready before a run and says so); later runs load
+them in well under a second.
 """
 
 from __future__ import annotations

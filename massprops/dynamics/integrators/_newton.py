@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from massprops.dynamics._jit import inner
+from massprops.dynamics.compiled.jit import inner
 from massprops.dynamics.integrators._shared import EPS, copy_into, f
 
 

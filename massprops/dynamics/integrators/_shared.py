@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics._jit import inner
+from massprops.dynamics.compiled.jit import inner
 from massprops.dynamics.exact import QUATERNION_RENORM
 from massprops.dynamics.forces import force_torque, rhs
 

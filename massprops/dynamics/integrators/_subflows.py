@@ -17,7 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
-from massprops.dynamics._jit import inner, jit
+from massprops.dynamics.compiled.jit import inner, jit
 from massprops.dynamics.exact import free_rotation_kernel
 from massprops.dynamics.forces import DRAG, JOINT, SPRING
 from massprops.dynamics.integrators._newton import lu_factor, lu_solve

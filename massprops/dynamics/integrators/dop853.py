@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics._jit import inlined, inner, kernel
+from massprops.dynamics.compiled.jit import inlined, inner, kernel
 from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, D
 from massprops.dynamics.integrators._shared import (
     all_finite,

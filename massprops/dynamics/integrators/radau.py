@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics._jit import inlined, inner, kernel
+from massprops.dynamics.compiled.jit import inlined, inner, kernel
 from massprops.dynamics.integrators._newton import (
     CONVERGED,
     DIVERGED,

@@ -49,7 +49,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics._jit import inlined, jit, kernel
+from massprops.dynamics.compiled.jit import inlined, jit, kernel
 from massprops.dynamics.integrators._shared import (
     all_finite,
     copy_into,

@@ -30,7 +30,7 @@ from numba import njit
 from numba.extending import overload, register_jitable
 
 from massprops.dynamics import MANAGED_CACHE, _elementwise, elliptic, exact, forces  # noqa: F401
-from massprops.dynamics.prebuilt import seed
+from massprops.dynamics.compiled.prebuilt import seed
 
 if MANAGED_CACHE is not None:  # before any kernel looks for its cached code
     seed(MANAGED_CACHE)

@@ -14,7 +14,7 @@ the caller hears about it while it happens:
   line to stderr);
 - in a process that runs massprops alone (the CLI calls `whole_process`; a library import
   keeps numba as it is and everything in its own process), numba is started lean
-  (``_jit.start_numba_lean``), and the first compile starts one helper process that compiles
+  (``jit.start_numba_lean``), and the first compile starts one helper process that compiles
   the batch's other kernels into the same cache on the second core; the caller waits for it
   before loading them (a helper that fails costs nothing but the time: the kernels are then
   compiled here).
@@ -84,7 +84,7 @@ def prepare(names: Sequence[str], notice: Callable[[str], None] | None = None) -
     from numba.core import event
 
     if _whole_process:
-        from massprops.dynamics._jit import start_numba_lean
+        from massprops.dynamics.compiled.jit import start_numba_lean
 
         start_numba_lean()
 
@@ -193,7 +193,7 @@ def _wall_estimate(kernels: list[str], helper: list[str]) -> float:
 
 def _spawn(kernels: list[str]) -> subprocess.Popen | None:
     """A helper process compiling ``kernels`` into the same cache (None if it cannot start)."""
-    code = ("import sys; from massprops.dynamics.compiling import helper_main; "
+    code = ("import sys; from massprops.dynamics.compiled.compiling import helper_main; "
             "helper_main(sys.argv[1:])")
     try:
         return subprocess.Popen([sys.executable, "-c", code, *kernels], env=os.environ.copy(),
@@ -205,7 +205,7 @@ def _spawn(kernels: list[str]) -> subprocess.Popen | None:
 
 def helper_main(kernels: list[str]) -> None:
     """The helper process: load or compile ``kernels`` into the shared cache, then exit."""
-    from massprops.dynamics._jit import start_numba_lean
+    from massprops.dynamics.compiled.jit import start_numba_lean
 
     start_numba_lean()
     for name in kernels:

@@ -15,7 +15,7 @@ CPU name and features). A wheel built on another machine or with another numba l
 numba does not use, and the first run compiles as it would have (with its notice). The manifest
 only avoids copying files numba would ignore.
 
-    python -m massprops.dynamics.prebuilt [--only rk4,dop853]    # run with the package to fill
+    python -m massprops.dynamics.compiled.prebuilt [--only rk4,dop853]  # fills this package's
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-PACKAGE = Path(__file__).resolve().parent.parent
+PACKAGE = Path(__file__).resolve().parents[2]
 """The folder of the `massprops` package these kernels belong to."""
 
 FOLDER = Path(__file__).resolve().parent / "_prebuilt"
@@ -58,7 +58,7 @@ def build(names: list[str] | None = None, jobs: int = 2) -> int:
     """Compile the kernels of the integrators ``names`` (default: every stepping one) of the
     package this module is in and store them in `FOLDER`; returns the number of files.
     ``jobs`` processes compile side by side (one kernel is one process's work)."""
-    from massprops.dynamics import compiling
+    from massprops.dynamics.compiled import compiling
     from massprops.dynamics.integrators import INTEGRATORS
 
     kernels = compiling.compiled_names(names or list(INTEGRATORS))
@@ -68,7 +68,7 @@ def build(names: list[str] | None = None, jobs: int = 2) -> int:
         env = dict(os.environ, NUMBA_CACHE_DIR=str(scratch),
                    PYTHONPATH=os.pathsep.join([str(PACKAGE.parent),
                                                os.environ.get("PYTHONPATH", "")]))
-        code = ("import sys; from massprops.dynamics.compiling import helper_main; "
+        code = ("import sys; from massprops.dynamics.compiled.compiling import helper_main; "
                 "helper_main(sys.argv[1:])")
         procs = [subprocess.Popen([sys.executable, "-c", code, *share], env=env, cwd=PACKAGE.parent)
                  for share in shares if share]
@@ -135,7 +135,7 @@ def main(argv: list[str]) -> None:
     if argv[:1] == ["--only"] and len(argv) == 2:
         names = argv[1].split(",")
     elif argv:
-        sys.exit("usage: python -m massprops.dynamics.prebuilt [--only rk4,dop853]")
+        sys.exit("usage: python -m massprops.dynamics.compiled.prebuilt [--only rk4,dop853]")
     print(f"massprops: prebuilt {build(names)} kernel cache files into {FOLDER}")
 
 
