@@ -145,6 +145,26 @@ def test_the_bound_stops_a_run_within_its_steps():
     strict_json(part.as_dict())
 
 
+def test_a_step_cut_into_countless_pieces_hands_control_back_for_the_pace_check(monkeypatch):
+    """A 5 g body on an 8e9 N/m spring at a 1 m lever (rate ~1.5e8/s; found by the fuzz): the
+    implicit method's Newton iteration fails at every nominal step of 6 ms and cuts it into
+    thousands of pieces. One compiled call planned for CHUNK_STEPS steps then took pieces up to
+    the whole run bound (minutes) before anything checked its pace; each call now takes at most
+    CALL_STEPS, so the projection (budget.exhausted) stops the run early. Both thresholds are
+    scaled down here: the mechanism is the same at any size."""
+    from massprops.dynamics import budget, runner
+
+    monkeypatch.setattr(runner, "CALL_STEPS", 2_000)
+    monkeypatch.setattr(budget, "PROJECT_AFTER", 10_000)
+    body = RigidBody.from_inertia(0.005, np.diag([2e-5, 1.8e-4, 1.9e-4]))
+    spring = Spring(np.zeros(3), 8e9, point=np.array([-0.83, -0.24, -0.52]))
+    sc = scene(body, [spring], duration=7000.0, integrator="implicit", step=6e-3)
+    with pytest.raises(RunBudgetError, match="at its pace so far") as info:
+        simulate(sc)
+    assert 10_000 <= info.value.partial.steps < 14_000  # stopped at the first check past 1e4
+    strict_json(info.value.partial.as_dict())
+
+
 def test_too_many_samples_are_refused_before_any_allocation():
     sc = scene(NEEDLE, duration=1e6, omega=(1.0, 0.0, 0.0))
     with pytest.raises(RunBudgetError, match="output samples"):

@@ -25,6 +25,13 @@ CHUNK_STEPS = 50_000
 """Steps per compiled call (~0.05 s): between calls Ctrl-C and the progress bar are served.
 Chunks are sized by step counts, never by timers, so results do not depend on the machine."""
 
+CALL_STEPS = 4 * CHUNK_STEPS
+"""Steps one compiled call may take at most (kernels that count their steps: adaptive ones, and
+the implicit ones, which cut a step whose Newton iteration fails into pieces): a call planned
+for CHUNK_STEPS that needs far more (a step cut into thousands of pieces) hands control back
+after ~1-2 s, so that the run bound's pace projection (budget.exhausted) and Ctrl-C are served,
+and the run goes on from where it stopped."""
+
 FIRST_CHUNK = 1 / 32
 """An adaptive run's first call covers this fraction of the run, or CHUNK_STEPS steps of
 FIRST_STEP_RAD at the fastest rate of the start (spin, stiffest term), if that is shorter; later
@@ -186,8 +193,7 @@ class _Runner:
         sel = np.flatnonzero((t_out >= t0) & (t_out <= t1) if first else
                              (t_out > t0) & (t_out <= t1))
         accel = p.constant_force(active) / p.mass if rot_only else None
-        arrays = (active, p.codes, p.params, p.mass, p.inertia, self.floors,
-                  self.max_steps or budget.MAX_STEPS)
+        limit = self.max_steps or budget.MAX_STEPS
         # a segment of one or two steps (a force window shorter than the step) is stepped the
         # same way by a 2h companion, so its error is invisible to Richardson: keep the kernel's
         # own local estimate of it
@@ -201,6 +207,8 @@ class _Runner:
             y = y_full[6:].copy() if rot_only else y_full.copy()
             ys = np.empty((idx.size, y.size))
             steps_before = int(self.stats[0])
+            arrays = (active, p.codes, p.params, p.mass, p.inertia, self.floors,
+                      min(limit, steps_before + CALL_STEPS))
             err, t_reached = self.spec.run_segment(y, t, t_end, self.setting, arrays, rot_only,
                                                    t_out[idx], ys, self.stats)
             if rot_only:
@@ -219,6 +227,9 @@ class _Runner:
             self.t_now = t_reached
             if short:
                 self.short_err += err
+            if self.stats[4] == STATUS_STEP_LIMIT and self.stats[0] < limit:
+                self.stats[4] = 0  # this call's share of steps, not the run bound: go on
+                t_end = t_reached
             if self.stats[4] == STATUS_STEP_LIMIT:  # the run bound, inside a call
                 self.failure = (f"{self.spec.name} stopped at t = {t_reached:.6g} s: it has "
                                 f"taken {int(self.stats[0]):.3g} steps, the run bound "
