@@ -42,6 +42,20 @@ def test_order_reduction_is_seen_and_not_understated(order, reduced):
     assert global_estimate("fixed", order, d1, d2) == pytest.approx(true, rel=1e-12)
 
 
+def test_an_order_that_keeps_falling_as_h_shrinks_is_not_credited_beyond_the_assumed_order():
+    """Order reduction under way (Radau IIA on a stiff problem): the error falls like h^4.3
+    between 4h and 2h but only like h^3 between 2h and h, so the ratio the companions show
+    (~20) overstates how much the run at h gained. Crediting at most 2^3 (the stage order)
+    keeps the estimate above the truth; crediting the observed ratio does not."""
+    e = {4: 20.0 * 13.0, 2: 13.0, 1: 1.0}  # the heavy_top_damped ratios, in units of e(h)
+    d1, d2 = e[2] - e[1], e[4] - e[2]
+    assert global_estimate("fixed", 5, d1, d2) < e[1]  # 12/19: understated
+    assert global_estimate("fixed", 5, d1, d2, assumed_order=3) == pytest.approx(12 / 7)
+    assert global_estimate("fixed", 5, d1, d2, assumed_order=3) >= e[1]
+    # beyond 2 * 2^order the run is not asymptotic at all: the distance itself, as before
+    assert global_estimate("fixed", 5, 1.0, 70.0, assumed_order=3) == 1.0
+
+
 def test_noise_is_reported_at_its_own_size():
     """Round-off amplified near a separatrix: runs that differ at random by σ (no truncation
     error at all, the hardest case). Three runs cannot tell more: the estimate is within 10x of

@@ -15,7 +15,9 @@ setting, compared in that metric.
   this is the classical rule. Where the differences are not truncation error of order p (round-off
   amplified near a separatrix, an implicit method's Newton floor, order reduction on a stiff
   mode) ρ falls short of 2^p, and dividing by 2^p - 1 would understate the error up to 63-fold:
-  the estimate grows towards |y_h - y_2h| itself, the size of such errors. A ratio beyond 2·2^p,
+  the estimate grows towards |y_h - y_2h| itself, the size of such errors. Where the order
+  itself can fall (Radau IIA on a stiff problem: to its stage order 3), ρ is clipped to 2^3
+  even when the coarser pair showed more: the ratio shrinks as h does. A ratio beyond 2·2^p,
   or a 4h run that diverged, says the same from the other side (h is not in the asymptotic
   regime): the estimate is then |y_h - y_2h|;
 - adaptive rtol: the companion runs at rtol / ADAPTIVE_TIGHTENING, whose error is ~20× smaller,
@@ -90,10 +92,14 @@ def companion_settings(kind: str, setting: float) -> tuple[float, ...]:
     return ()
 
 
-def global_estimate(kind: str, order: int, d_run: float, d_companions: float | None) -> float:
+def global_estimate(kind: str, order: int, d_run: float, d_companions: float | None,
+                    assumed_order: int | None = None) -> float:
     """The error estimate of a run from the distances (contract metric) between the run and its
     first companion (``d_run``) and between the first and the second companion
-    (``d_companions``; None when there is none or it diverged). See the module doc."""
+    (``d_companions``; None when there is none or it diverged). See the module doc.
+    ``assumed_order`` (default ``order``): the highest order the rule may credit the run with,
+    lower for a method whose order can fall on stiff problems (IntegratorSpec.estimate_order);
+    the non-asymptotic test still uses the classical ``order``."""
     if kind != "fixed":
         return d_run
     asymptotic = 2.0**order
@@ -104,7 +110,8 @@ def global_estimate(kind: str, order: int, d_run: float, d_companions: float | N
     ratio = d_companions / d_run
     if ratio > 2.0 * asymptotic:
         return d_run
-    return d_run / (min(max(ratio, 2.0), asymptotic) - 1.0)
+    credited = 2.0 ** (assumed_order or order)
+    return d_run / (min(max(ratio, 2.0), credited) - 1.0)
 
 
 def exact_roundoff(traj, scales: Scales) -> float:

@@ -168,7 +168,7 @@ def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out:
                                 for k in (1, 2, 4))
         scales = Scales.of(scene.body.size, truth, scene.time.duration)
         accuracy = global_estimate(spec.kind, spec.order, state_error(truth, check, scales),
-                                   state_error(check, coarse, scales))
+                                   state_error(check, coarse, scales), spec.estimate_order)
         how = (f"implicit at step {fine:.3g} s against steps {2 * fine:.3g} s and "
                f"{4 * fine:.3g} s (Richardson with the observed order)")
     else:

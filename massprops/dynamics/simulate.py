@@ -292,7 +292,7 @@ def _error_estimate(scene, program, spec, setting, traj, others: list[RawRun] | 
     blind = short_err * max(1 / scales.size, 1 / scales.velocity, 2.0,
                             1 / scales.angular_velocity)
     estimate = global_estimate(spec.kind, spec.order, state_error(traj, first, scales),
-                               d_companions) + blind
+                               d_companions, spec.estimate_order) + blind
     if unresolved(spec, setting, program):  # a mode all three runs fail alike: measured apart
         probe = unresolved_mode_error(scene, program, spec, setting, scales, traj.t)
         if not math.isfinite(probe):  # the probe itself failed: the size is unknown

@@ -85,7 +85,7 @@ def lu_solve(a, piv, b):
 # --- the stopping rule of simplified Newton iterations (Hairer & Wanner, Solving ODEs II, IV.8) --
 MAX_ITER = 10
 """Iterations allowed per step before the step counts as failed."""
-NEWTON_TOL = 1e-12
+NEWTON_TOL = 1e-14
 """Stop when the predicted remaining correction η‖Δ‖ is below this (‖·‖: max over components of
 |Δ_i| / the scale of i's block, see the package contract)."""
 ROUNDOFF = 1e-14

@@ -42,6 +42,8 @@ class IntegratorSpec:
     description : one line, shown in ``--help``.
     run_segment : the checked entry point (`segment_runner`), see the package docstring.
     stiff : stable far beyond the explicit step limit (~2.8 / ForceProgram.stiffest_rate).
+    estimate_order : the highest order the error estimate's Richardson rule may assume (None:
+        ``order``); lower where the order can fall on stiff problems (order reduction).
     """
 
     name: str
@@ -50,6 +52,7 @@ class IntegratorSpec:
     description: str
     run_segment: RunSegment
     stiff: bool = False
+    estimate_order: int | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
