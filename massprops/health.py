@@ -308,6 +308,9 @@ def _plan_warnings(plan: Plan, volumes: np.ndarray, quiet: np.ndarray, unioned: 
     out += _first_five([f"components {o + 1} and {i + 1} overlap or nest (a vertex of {i + 1} "
                         f"lies inside {o + 1}): the volume they share is counted twice"
                         for o, i in ([] if unioned else plan.overlaps)])
+    out += _first_five([f"components {a + 1} and {b + 1} overlap (their surfaces cross: a point "
+                        f"lies inside both): the volume they share is counted twice"
+                        for a, b in ([] if unioned else plan.crossings)])
     out += _first_five([f"component {c + 1} (a cavity: faces inward) is partly outside every "
                         f"solid part: that part is subtracted from nothing" for c in plan.loose])
     return out
@@ -523,11 +526,11 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
     warnings += _plan_warnings(plan, volumes, touched, unioned)
     flip = rewind ^ np.append(plan.flip, False)[a.face_comp]  # face_comp -1: no component
     fixed = _reverse(mesh, flip) if flip.any() else mesh
-    if plan.overlaps and not unioned:  # measured on the oriented pieces; lazily: rare, costly
+    if (plan.overlaps or plan.crossings) and not unioned:  # measured; lazily: rare, costly
         from massprops.repair.union import overlap_warning
 
         warnings.append(overlap_warning(fixed, volumes * np.where(plan.flip, -1.0, 1.0),
-                                        plan.overlaps))
+                                        plan.overlaps + plan.crossings))
     poly = _polygon_of_triangle(mesh)
     changed = np.bincount(poly, weights=flip, minlength=mesh.n_faces) > 0
     in_touched = np.bincount(poly, weights=np.append(touched, False)[a.face_comp],

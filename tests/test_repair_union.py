@@ -3,6 +3,7 @@ face, cavities and a rattle; invariances for shapes without a closed form."""
 
 from __future__ import annotations
 
+import math
 from fractions import Fraction as Q
 
 import numpy as np
@@ -221,6 +222,48 @@ def test_default_warning_measures_the_shared_volume_and_names_union():
                     f"reported), measured from their union: that volume is counted more than "
                     f"once; --union counts it once"]
     assert result.repairs is None and result.properties.volume == pytest.approx(18.0)
+
+
+def shared_line(result) -> list[str]:
+    return [w for w in result.warnings if w.startswith("the pieces share")]
+
+
+@pytest.mark.parametrize("height", [0.6, 0.5], ids=["taller", "flush-degenerate"])
+def test_bars_crossing_with_no_vertex_inside_each_other_are_found_and_measured(height):
+    """A plus sign: no vertex of either bar lies inside the other (the vertex samples see
+    nothing), yet 1 m³ is counted twice. With equal heights the bars' top faces are coplanar
+    and every edge crossing is degenerate; the interior probe finds it all the same."""
+    result = inspect_mesh(join(box((-2, -0.5, -0.5), (2, 0.5, 0.5)),
+                               box((-0.5, -2, -height), (0.5, 2, height))))
+    shared = 1.0  # [-0.5, 0.5]³, in closed form
+    total = 4.0 + 4.0 * 2 * height
+    assert any(w.startswith("components 1 and 2 overlap (their surfaces cross")
+               for w in result.warnings)
+    assert shared_line(result) == [f"the pieces share {shared:.3g} m³ ({100 * shared / total:.3g}"
+                                   f"% of the {total:.6g} m³ reported), measured from their "
+                                   f"union: that volume is counted more than once; --union "
+                                   f"counts it once"]
+
+
+def test_an_x_of_turned_bars_shares_the_rhombus_prism_of_closed_form():
+    angle, width, height = 0.7, 0.6, 0.6
+    bar = box((-2, -width / 2, -height / 2), (2, width / 2, height / 2))
+    result = inspect_mesh(join(bar, moved(bar, rotation((0, 0, 1), angle))))
+    (line,) = shared_line(result)
+    shared = width**2 / math.sin(angle) * height  # the rhombus of two strips, times the height
+    assert line.startswith(f"the pieces share {shared:.3g} m³")
+
+
+def test_pieces_that_touch_or_only_share_a_bounding_box_are_not_overlaps():
+    touching = join(box((0, 0, 0), (1, 1, 1)), box((1, 0.2, 0.2), (2, 0.8, 0.8)))
+    # a thin bar across the corner of a cube, 0.42 m past it: their boxes share a volume
+    corner = moved(box((-1, -0.05, -0.05), (1, 0.05, 0.05)), rotation((0, 0, 1), -math.pi / 4),
+                   (1.3, 1.3, 0.5))
+    apart = join(box((0, 0, 0), (1, 1, 1)), corner)
+    for mesh in (touching, apart):
+        result = inspect_mesh(mesh)
+        assert not [w for w in result.warnings if "overlap" in w or "share" in w], \
+            result.warnings
 
 
 def test_modes_combine_in_order_fill_then_unite_then_wall():
