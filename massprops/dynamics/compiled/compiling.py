@@ -24,6 +24,7 @@ The closed form (``exact``) needs no compiled kernel: it is evaluated with numpy
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import sys
@@ -95,7 +96,7 @@ def prepare(names: Sequence[str], notice: Callable[[str], None] | None = None) -
             watch.on_start()
 
         def on_end(self, ev) -> None:
-            pass
+            """Nothing to do: the notice is given when a compile starts."""
 
     with event.install_listener("numba:compile", Listener()):
         try:
@@ -163,10 +164,8 @@ class _Watch:
         """Block until the helper has finished (its kernels are then in the cache)."""
         if self.helper is None:
             return
-        try:
+        with contextlib.suppress(subprocess.TimeoutExpired):  # then stopped, its rest done here
             self.helper.wait(timeout=HELPER_TIMEOUT_S)
-        except subprocess.TimeoutExpired:
-            pass
         self.stop_helper()
 
     def stop_helper(self) -> None:

@@ -20,6 +20,7 @@ only avoids copying files numba would ignore.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -103,14 +104,14 @@ def seed(cache: Path) -> int:
     except (OSError, ValueError):
         return 0
     count = 0
-    try:
+    # a manifest or numba layout not as expected, or a cache we cannot write: what was not
+    # copied is compiled on first use (and, with no marker, the copy is tried again next time)
+    with contextlib.suppress(OSError, ImportError, KeyError, TypeError):
         folders = manifest.pop("folders")
         if manifest == made_with():
             for rel in folders:
                 count += _copy_missing(FOLDER / rel, cache / _cache_subpath(PACKAGE / rel))
         marker.touch()
-    except (OSError, ImportError, KeyError, TypeError):
-        pass
     return count
 
 
