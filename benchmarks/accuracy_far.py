@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from massprops.mass import mass_properties
 from massprops.mesh import Mesh
+from massprops.mesh.integral import mass_properties
 
 QUADS = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
 TRIS = np.array([t for a, b, c, d in QUADS for t in ([a, b, c], [a, c, d])], dtype=np.int64)

@@ -8,9 +8,10 @@ import threading
 import numpy as np
 import pytest
 
-from massprops import analysis, parallel
-from massprops.analysis import OVERLAP_TRIANGLES, inspect_mesh
+from massprops import parallel
 from massprops.errors import MeshTopologyError, UsageError
+from massprops.inspection import file as analysis
+from massprops.inspection.file import OVERLAP_TRIANGLES, inspect_mesh
 from massprops.mesh import Mesh
 
 

@@ -22,10 +22,10 @@ import pytest
 from _batchdata import binary_stl_box, descendants, mixed_batch, torus_obj
 from conftest import box_vf
 
-from massprops.analysis import inspect_file
 from massprops.batch import BadInput, expand_inputs, inspect_many, mesh_extensions, plan
 from massprops.batch.table import CSV_COLUMNS, csv_header, csv_row
 from massprops.errors import error_message, exit_code
+from massprops.inspection.file import inspect_file
 
 
 def reference(path, **options) -> tuple:

@@ -19,10 +19,10 @@ import pytest
 from _batchdata import descendants, mixed_batch, torus_obj
 from conftest import SAMPLES, box_vf, json_lines
 
-from massprops.analysis import inspect_file
 from massprops.batch import plan, pool
+from massprops.cli.report import print_inspection
 from massprops.errors import error_message, exit_code
-from massprops.report import print_inspection
+from massprops.inspection.file import inspect_file
 
 
 def sequential(paths, out_format="json", **options) -> tuple[str, str, int]:

@@ -12,8 +12,8 @@ import signal
 import pytest
 from _batchdata import mixed_batch, torus_obj
 
-from massprops.analysis import inspect_file
 from massprops.batch import inspect_many
+from massprops.inspection.file import inspect_file
 
 distributed = pytest.importorskip("distributed")
 

@@ -15,11 +15,11 @@ from conftest import CUBE_QUADS, CUBE_VERTS, exact_mass_properties, json_lines
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from massprops.analysis import inspect_file
 from massprops.errors import MeshTopologyError
-from massprops.surface import exactly_flat
+from massprops.inspection.file import inspect_file
+from massprops.mesh.geometry import exactly_flat
+from massprops.mesh.weld import near_groups
 from massprops.tolerances import EPS, NEAR_WELD_ULPS
-from massprops.weld import near_groups
 
 SIZE = np.array([0.05, 0.03, 0.02])  # a small part, in metres
 

@@ -12,10 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from massprops.errors import DegenerateMeshError, MeshFormatError, MeshTopologyError
-from massprops.health import MeshHealth, check_mesh, prepare_mesh
-from massprops.mesh import Mesh, fan_triangulate
-from massprops.surface import connected_components, winding_numbers
-from massprops.weld import weld
+from massprops.mesh.geometry import winding_numbers
+from massprops.mesh.health import MeshHealth, check_mesh, prepare_mesh
+from massprops.mesh.topology import connected_components
+from massprops.mesh.value import Mesh, fan_triangulate
+from massprops.mesh.weld import weld
 
 # Unit-cube corners are numbered 4x + 2y + z; these quads wind counter-clockwise seen from outside.
 CUBE_QUADS = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]

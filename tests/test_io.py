@@ -38,7 +38,7 @@ from massprops.io import (
 )
 from massprops.io.atomic import atomic_write_bytes
 from massprops.io.source import Source
-from massprops.mesh import Mesh, fan_triangulate
+from massprops.mesh.value import Mesh, fan_triangulate
 
 # --- test meshes, from their definitions -------------------------------------------------------
 # Unit cube: corner i at (i & 1, i >> 1 & 1, i >> 2 & 1); quads counter-clockwise from outside.

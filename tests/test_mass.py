@@ -14,11 +14,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
 
-from massprops import facesums
-from massprops import mass as mass_module
 from massprops.errors import ComputationError, DegenerateMeshError, MeshFormatError, UsageError
-from massprops.mass import mass_properties
-from massprops.mesh import Mesh
+from massprops.mesh import Mesh, facesums
+from massprops.mesh import integral as mass_module
+from massprops.mesh.integral import mass_properties
 
 
 def _eigenvalues_below(j, x) -> int | None:

@@ -15,8 +15,8 @@ from exact_moments import prism
 from repair_meshes import box, hemisphere_bowl, icosphere, without
 from test_repair_union import assert_matches, bars
 
-from massprops.analysis import inspect_mesh
 from massprops.errors import MeshTopologyError
+from massprops.inspection.file import inspect_mesh
 from massprops.mesh import Mesh
 from massprops.repair import RepairOptions
 from massprops.repair.holes import fill_holes

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import SAMPLES
 
-from massprops.analysis import inspect_file
+from massprops.inspection.file import inspect_file
 from massprops.repair import RepairOptions
 
 

@@ -21,8 +21,8 @@ from repair_meshes import (
 )
 from test_repair_union import bars
 
-from massprops.analysis import inspect_mesh
 from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError
+from massprops.inspection.file import inspect_mesh
 from massprops.mesh import Mesh
 from massprops.repair import RepairOptions
 from massprops.repair.shell import shell_properties

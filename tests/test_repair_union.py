@@ -13,8 +13,8 @@ from exact_moments import box as exact_box
 from exact_moments import mesh as exact_mesh
 from repair_meshes import box, icosphere, join, moved, rotation
 
-from massprops.analysis import inspect_mesh
 from massprops.errors import MeshTopologyError
+from massprops.inspection.file import inspect_mesh
 from massprops.mesh import Mesh
 from massprops.repair import RepairOptions
 

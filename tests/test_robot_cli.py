@@ -113,7 +113,7 @@ def _imported(args: list[str]) -> set[str]:
 
 def test_inspect_json_imports_no_robot_code_and_no_xml():
     mods = _imported(["inspect", "--json", str(SAMPLES / "cube.obj")])
-    assert "massprops.analysis" in mods
+    assert "massprops.inspection.file" in mods
     assert not {m for m in mods if m.startswith(("massprops.robot", "xml", "pyexpat", "lxml"))}
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from conftest import SAMPLES, rot_z
 
-from massprops.analysis import inspect_file
+from massprops.inspection.file import inspect_file
 
 
 def cuboid():

@@ -447,7 +447,7 @@ def test_a_scene_file_that_is_not_utf8_is_refused(tmp_path):
         load_scene(path)
 
 
-# --- mesh bodies: these need massprops.io, massprops.health and massprops.mass -----------------
+# --- mesh bodies: these need massprops.io, massprops.mesh.health and massprops.mesh.integral ---
 def cuboid_vf(sides, offset, omit: tuple[int, ...] = ()) -> str:
     """A .vf box [0, a] x [0, b] x [0, c] + offset: quads counter-clockwise seen from outside,
     in the order z=0, z=c, y=0, y=b, x=0, x=a; those numbered in ``omit`` are left out (open)."""

@@ -11,9 +11,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from massprops import surface, weld
+from massprops.mesh import topology as surface
+from massprops.mesh import weld
+from massprops.mesh.topology import connected_components, edges
 from massprops.parallel import sort_in_two
-from massprops.surface import connected_components, edges
 
 
 # --- sort_in_two ---------------------------------------------------------------------------------

@@ -1,9 +1,10 @@
 """Many meshes: inputs expanded, inspected in parallel, reported in input order.
 
 ``inspect_many(paths, executor=None, **options)`` inspects every path like
-`massprops.analysis.inspect_file` (``options`` are its keyword arguments: ``unit``, ``density``,
-``mass``, ``allow_open``, ``format``, and whatever it accepts later) and yields one `MeshResult`
-per input, **in input order**, each as soon as it and every input before it are done. Work runs
+`massprops.inspection.file.inspect_file` (``options`` are its keyword arguments: ``unit``,
+``density``, ``mass``, ``allow_open``, ``format``, and whatever it accepts later) and yields one
+`MeshResult` per input, **in input order**, each as soon as it and every input before it are
+done. Work runs
 
 - in this process, when that is all a pool could do (``jobs=1``, or a batch too small to pay
   for starting worker processes): the same calls, in the same order, as a plain loop;

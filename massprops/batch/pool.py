@@ -38,7 +38,7 @@ def local_pool(jobs: int) -> ProcessPoolExecutor:
 
         context = multiprocessing.get_context("forkserver")
         # numpy and the mesh code imported once in the server, not again in every worker
-        context.set_forkserver_preload(["massprops.batch.worker", "massprops.analysis"])
+        context.set_forkserver_preload(["massprops.batch.worker", "massprops.inspection.file"])
         forkserver.ensure_running()  # boots in the background until the first worker is due
     else:
         context = multiprocessing.get_context("spawn")

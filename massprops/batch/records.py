@@ -48,8 +48,8 @@ class MeshResult:
 
     file : the input as named in messages and in the JSON's ``"file"`` (the path as given,
         ``<stdin>`` for ``-``).
-    data : the contract's JSON object (`massprops.analysis.Inspection.as_dict`: python floats,
-        lists, SI units, inertia about the COM in the mesh's axes), or None if it failed.
+    data : the contract's JSON object (`massprops.inspection.file.Inspection.as_dict`: python
+        floats, lists, SI units, inertia about the COM in the mesh's axes), or None if it failed.
     warnings : one line each, as printed after ``massprops: warning: <file>: ``.
     error : why it failed, or None.
     repaired : the keys of ``data["repairs"]`` that repairs asked for produced (what the human
@@ -74,10 +74,10 @@ class MeshResult:
 def inspect_one(path: str | os.PathLike, options: dict[str, Any], *, name: str | None = None,
                 keep_exception: bool = False) -> MeshResult:
     """Inspect one file (``-``: standard input, named ``<stdin>``) with
-    `massprops.analysis.inspect_file` keyword ``options``; any error becomes the record's
+    `massprops.inspection.file.inspect_file` keyword ``options``; any error becomes the record's
     `ErrorInfo` (KeyboardInterrupt propagates). ``name``: what messages call it (default: the
     path as given)."""
-    from massprops.analysis import inspect_file
+    from massprops.inspection.file import inspect_file
 
     stdin = os.fspath(path) == "-"
     label = "<stdin>" if stdin else (os.fsdecode(path) if name is None else name)

@@ -83,7 +83,7 @@ def inspect_many(paths: Iterable, executor: Executor | None = None, *, jobs: int
         ``_max_workers`` if it has one, else 8).
     chunk_s : target estimated seconds per task (default: `plan.LOCAL_CHUNK_S` for a local
         pool, `plan.CLUSTER_CHUNK_S` for any other executor).
-    options : keyword arguments of `massprops.analysis.inspect_file` (``unit``, ``density``,
+    options : keyword arguments of `massprops.inspection.file.inspect_file` (``unit``, ``density``,
         ``mass``, ``allow_open``, ``format``, ...), the same for every file.
 
     Raises UsageError for jobs < 1; the first record raises TypeError for an option
@@ -97,7 +97,7 @@ def inspect_many(paths: Iterable, executor: Executor | None = None, *, jobs: int
 
 
 def _check_options(options: dict[str, Any]) -> None:
-    from massprops.analysis import inspect_file
+    from massprops.inspection.file import inspect_file
 
     code = inspect_file.__code__
     taken = set(code.co_varnames[1 : code.co_argcount + code.co_kwonlyargcount]) - {"name"}

@@ -25,8 +25,8 @@ def align(ctx: click.Context, input_path: str, output_path: str, force: bool, as
     options = inspect_kwargs(mesh_options)
 
     def run() -> None:
-        from massprops.align import align_mesh
-        from massprops.analysis import inspect_file
+        from massprops.inspection.align import align_mesh
+        from massprops.inspection.file import inspect_file
         from massprops.io import write_mesh
 
         result = inspect_file(input_path, **options)
@@ -39,7 +39,7 @@ def align(ctx: click.Context, input_path: str, output_path: str, force: bool, as
             emit_json({"input": input_path, "output": output_path, **aligned.as_dict(),
                        **({} if repairs is None else {"repairs": repairs})})
         else:
-            from massprops.report import print_alignment
+            from massprops.cli.report import print_alignment
 
             print_alignment(input_path, output_path, aligned, result.repairs)
 

@@ -127,7 +127,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         if as_json:
             emit_json(result.as_dict())
         else:
-            from massprops.report import print_simulation
+            from massprops.cli.report import print_simulation
 
             print_simulation(scene, result)
         if result.interrupted:
@@ -182,7 +182,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
         if as_json:
             emit_json(report.as_dict())
         else:
-            from massprops.report import print_precision
+            from massprops.cli.report import print_precision
 
             print_precision(scene_path, report)
 

@@ -113,7 +113,7 @@ def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool
 
     progress = None
     if not quiet and sys.stderr.isatty():
-        from massprops.report import BatchProgress
+        from massprops.cli.report import BatchProgress
 
         progress = BatchProgress()
     start = time.monotonic()
@@ -242,7 +242,7 @@ def _show_record(ctx: click.Context, record: Any, out_format: str, principal: bo
                                           principal=principal)
             _to_stdout(lambda: click.echo(element))
         else:
-            from massprops.report import print_inspection
+            from massprops.cli.report import print_inspection
 
             _to_stdout(lambda: print_inspection(record.data, record.repaired))
 

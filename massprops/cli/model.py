@@ -48,7 +48,7 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
             for r in report.links:
                 emit_json(r.as_dict(description))
         else:
-            from massprops.report import print_model
+            from massprops.cli.report import print_model
 
             print_model(report, rtol)
         if output_path is not None:

@@ -148,7 +148,7 @@ def _mesh_body(spec: _MeshBodySpec) -> tuple[RigidBody, tuple[str, ...]]:
     """Read, check and integrate the mesh: the body and the health check's warnings. Errors keep
     their class, prefixed with our place."""
     # Imported here: the mesh pipeline is heavy and only mesh bodies need it.
-    from massprops.analysis import inspect_mesh
+    from massprops.inspection.file import inspect_mesh
     from massprops.io import read_mesh
     from massprops.repair import RepairOptions
 

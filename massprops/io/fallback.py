@@ -20,7 +20,7 @@ import numpy as np
 from massprops.errors import MeshFormatError
 from massprops.io import validate
 from massprops.io.source import Source, read_error
-from massprops.mesh import Mesh, fan_triangulate
+from massprops.mesh.value import Mesh, fan_triangulate
 
 _SURFACE_CELLS = ("triangle", "quad", "polygon")
 

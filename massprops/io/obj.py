@@ -18,7 +18,7 @@ from massprops.io.textlines import (
     strip_comments,
     token_counts,
 )
-from massprops.mesh import Mesh, fan_triangulate
+from massprops.mesh.value import Mesh, fan_triangulate
 
 _CONTINUATION = re.compile(rb"\\[ \t]*\r?\n")
 _AFTER_SLASH = re.compile(rb"/\S*")  # "7/1/3", "7//3", "7/1" -> "7": only the vertex index counts

@@ -23,7 +23,7 @@ from massprops.io import validate
 from massprops.io.source import Source
 from massprops.io.textlines import first_columns, line_of_token, parse_numbers, token_starts
 from massprops.io.vf import LineCursor
-from massprops.mesh import Mesh, fan_triangulate
+from massprops.mesh.value import Mesh, fan_triangulate
 
 # Geomview's [ST][C][N]OFF: each prefix only appends columns to the vertex lines, which are
 # ignored. Case-sensitive on purpose: "nOFF" (n-dimensional) is not "NOFF" (normals).

@@ -19,7 +19,7 @@ from massprops.errors import MeshFileError, MeshFormatError
 from massprops.io import numtext, validate
 from massprops.io.source import Source, read_error, text_content
 from massprops.io.textlines import TextLines, parse_numbers, strip_comments
-from massprops.mesh import Mesh, fan_triangulate
+from massprops.mesh.value import Mesh, fan_triangulate
 
 VERTEX_SUFFIX = ".vtx"
 FACE_SUFFIX = ".fac"

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from massprops.facesums import gamma
-from massprops.mass import ErrorBars, MassProperties, Uncertainty
+from massprops.mesh.facesums import gamma
+from massprops.mesh.integral import ErrorBars, MassProperties, Uncertainty
 
 
 @dataclass(frozen=True, eq=False)

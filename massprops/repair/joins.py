@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from massprops.facesums import gamma
+from massprops.mesh.facesums import gamma
+from massprops.mesh.pieces import Welded
 from massprops.repair.bars import RegionSums, reach_sums
-from massprops.repair.topology import Welded
 
 CHUNK = 1 << 15
 """Edges or vertices per block: a block's temporaries stay in cache."""

@@ -6,9 +6,9 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from massprops.health import MeshHealth, check_mesh, close_cracks, prepare_mesh
-from massprops.mass import MassProperties, check_density_mass, mass_properties
 from massprops.mesh import Mesh
+from massprops.mesh.health import MeshHealth, check_mesh, close_cracks, prepare_mesh
+from massprops.mesh.integral import MassProperties, check_density_mass, mass_properties
 from massprops.repair import RepairOptions
 from massprops.repair.bars import Regions, moment_bounds, with_repair_bar
 

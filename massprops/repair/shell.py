@@ -40,9 +40,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError
-from massprops.facesums import BLOCK, U, gamma
 from massprops.inertia import parallel_axis_to_com
-from massprops.mass import (
+from massprops.mesh import Mesh
+from massprops.mesh.facesums import BLOCK, U, gamma
+from massprops.mesh.integral import (
     ErrorBars,
     MassProperties,
     Uncertainty,
@@ -50,10 +51,9 @@ from massprops.mass import (
     check_density_mass,
     properties_from_moments,
 )
-from massprops.mesh import Mesh
+from massprops.mesh.pieces import Welded
 from massprops.repair.bars import moment_bounds, with_repair_bar
 from massprops.repair.joins import Joins, joins, unit_normals
-from massprops.repair.topology import Welded
 from massprops.tolerances import SHELL_WARN_FRACTION
 
 MODEL = "mid-surface wall, faces extruded by T/2 each side, joined by mitres"
@@ -164,7 +164,7 @@ _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
 
 def _face_terms(mesh: Mesh, rows: np.ndarray, origin: np.ndarray, thickness: float) -> _FaceTerms:
     """One pass over the faces in blocks of ``facesums.BLOCK`` (cache-sized; each block total a
-    pairwise sum, the blocks added by math.fsum, as ``massprops.facesums`` does)."""
+    pairwise sum, the blocks added by math.fsum, as ``massprops.mesh.facesums`` does)."""
     t2 = thickness * thickness / 12
     totals, lo, hi = [], np.full(3, np.inf), np.full(3, -np.inf)
     for start in range(0, rows.size, BLOCK):
@@ -224,7 +224,7 @@ def _block_terms(p: np.ndarray, x: np.ndarray, t2: float) -> np.ndarray:
 # --- totals to moments ----------------------------------------------------------------------------
 def _unit_moments(faces: _FaceTerms, joins: Joins, thickness: float) -> UnitMoments:
     """Volume, COM (from the origin) and inertia about the COM per unit density, with their
-    rounding bounds (first-order propagation, as in ``massprops.mass``)."""
+    rounding bounds (first-order propagation, as in ``massprops.mesh.integral``)."""
     t = thickness
     volume = t * faces.area
     volume_err = t * faces.area_err + U * volume

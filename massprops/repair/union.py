@@ -9,7 +9,7 @@ is measured. Moving a triangle off its plane by at most δ changes any ∫g dV b
 area · δ · max|g| (the slab between the triangle and its projection), so those distances become
 the union's error bar (`massprops.repair.bars`). The result is integrated by the exact integral.
 
-What is united: the pieces of `massprops.repair.topology` (the surface cut at non-manifold
+What is united: the pieces of `massprops.mesh.pieces` (the surface cut at non-manifold
 edges). Each solid piece loses the cavities that cut into it but do not swallow it whole, then
 all solids are united: a cavity stays empty, a solid inside a cavity (a rattle) stays solid.
 A piece that is not a closed 2-manifold by itself cannot be an operand: it is added as it is
@@ -24,8 +24,9 @@ import numpy as np
 
 from massprops.errors import ComputationError
 from massprops.mesh import Mesh
+from massprops.mesh.overlap import Composed, compose
+from massprops.mesh.pieces import Pieces, Welded, split_pieces
 from massprops.repair.bars import Regions
-from massprops.repair.topology import Pieces, Welded, split_pieces
 
 U = 2.0**-53
 
@@ -73,14 +74,14 @@ class UnionResult:
 
 def union_mesh(mesh: Mesh) -> UnionResult:
     """Unite the pieces of ``mesh`` (closed pieces outward, cavities inward: as
-    `massprops.health.prepare_mesh` returns them). A single piece is returned unchanged."""
+    `massprops.mesh.health.prepare_mesh` returns them). A single piece is returned unchanged."""
     w = Welded.of(mesh)
     pieces = split_pieces(w)
     if pieces.count <= 1:
         record = UnionRecord(pieces.count, 0, 0, (), float(pieces.volumes.sum()), None, 0.0,
                              int(mesh.faces.shape[0]))
         return UnionResult(mesh, record, Regions.none(), ())
-    composed = _compose(w, pieces)
+    composed = compose(w, pieces)
     _check_volume(composed, pieces, mesh.name)
     out = composed.result.to_mesh64()
     verts = np.ascontiguousarray(out.vert_properties[:, :3], dtype=np.float64)
@@ -108,95 +109,11 @@ def finished(record: UnionRecord, volume_after: float) -> UnionRecord:
     return replace(record, volume_before=before, volume_after=float(volume_after))
 
 
-def overlap_warning(mesh: Mesh, volumes: np.ndarray, overlaps: list[tuple[int, int]]) -> str:
-    """The health check's line for a mesh whose pieces overlap (pieces as `prepare_mesh` numbers
-    them, ``volumes`` their signed volumes m³): how much volume is counted more than once,
-    measured from the union, or bounded by the smaller piece of each overlapping pair when the
-    union cannot be formed."""
-    total = float(volumes.sum())
-    try:
-        w = Welded.of(mesh)
-        composed = _compose(w, split_pieces(w))
-        united = composed.result.volume() + sum(composed.skipped_volumes)
-    except ImportError:
-        united = None
-    if united is not None and -1e-9 * abs(total) <= total - united <= abs(total):
-        extra = max(total - united, 0.0)  # else the boolean misbehaved: give the bound below
-        return (f"the pieces share {extra:.3g} m³ ({_percent(extra, total)} of the {total:.6g} m³ "
-                f"reported), measured from their union: that volume is counted more than once; "
-                f"--union counts it once")
-    bound = sum(min(abs(volumes[o]), abs(volumes[i])) for o, i in overlaps)
-    return (f"the pieces share at most {bound:.3g} m³ ({_percent(bound, total)} of the "
-            f"{total:.6g} m³ reported; the smaller piece of each overlapping pair), counted more "
-            f"than once; --union counts it once")
-
-
 def _percent(part: float, whole: float) -> str:
     return f"{100 * part / whole:.3g}%" if whole > 0 else "an unbounded share"
 
 
-# --- the boolean ----------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class _Composed:
-    result: object  # manifold3d.Manifold
-    solids: list[int]
-    cavities: list[int]
-    skipped: list[int]
-    skipped_volumes: list[float]
-    lines: tuple[str, ...]
-    warnings: tuple[str, ...]
-
-
-def _compose(w: Welded, pieces: Pieces) -> _Composed:
-    """Each solid minus the cavities that cut into it without swallowing it, all united."""
-    import manifold3d as mf
-
-    operands, skipped, lines = {}, [], []
-    order = np.argsort(pieces.label, kind="stable")
-    bounds = np.searchsorted(pieces.label[order], np.arange(pieces.count + 1))
-    for k in range(pieces.count):
-        rows = order[bounds[k]:bounds[k + 1]]
-        reason = None
-        if not pieces.closed[k]:
-            reason = f"it is not a closed 2-manifold by itself ({pieces.why_open(k)})"
-        elif pieces.volumes[k] == 0:
-            reason = "it encloses no volume"
-        else:
-            made = _manifold(mf, w, rows, reverse=pieces.volumes[k] < 0)
-            status = made.status()
-            if status != mf.Error.NoError:
-                reason = f"manifold3d refused it ({status.name})"
-            else:
-                operands[k] = made
-        if reason is not None:
-            skipped.append(k)
-            lines.append(f"piece {k + 1} ({rows.size} triangles, volume "
-                         f"{pieces.volumes[k]:.6g} m³): {reason}; added as it is")
-    solids = [k for k in operands if pieces.volumes[k] > 0]
-    cavities = [k for k in operands if pieces.volumes[k] < 0]
-    boxes = {k: np.array(m.bounding_box()).reshape(2, 3) for k, m in operands.items()}
-    used = set()
-    groups = []
-    for s in solids:
-        cut = [c for c in cavities if _boxes_meet(boxes[s], boxes[c])
-               and not (operands[s] - operands[c]).is_empty()]
-        used.update(cut)
-        if cut:
-            holes = mf.Manifold.batch_boolean([operands[c] for c in cut], mf.OpType.Add)
-            groups.append(operands[s] - holes)
-        else:
-            groups.append(operands[s])
-    result = mf.Manifold.batch_boolean(groups, mf.OpType.Add) if groups else mf.Manifold()
-    warnings = [f"piece {k + 1} of {pieces.count} is not closed by itself and cannot be "
-                f"united: {line.split(': ', 1)[1]}" for k, line in zip(skipped, lines)]
-    warnings += [f"piece {c + 1} (a cavity: faces inward) cuts into no solid piece; the union "
-                 f"leaves it out ({-pieces.volumes[c]:.6g} m³ no longer subtracted)"
-                 for c in cavities if c not in used]
-    return _Composed(result, solids, cavities, skipped,
-                     [float(pieces.volumes[k]) for k in skipped], tuple(lines), tuple(warnings))
-
-
-def _check_volume(composed: _Composed, pieces: Pieces, name: str) -> None:
+def _check_volume(composed: Composed, pieces: Pieces, name: str) -> None:
     """A union holds no more than its solids together: the boolean's volume (its own float sum)
     beyond that by more than rounding means its result cannot be trusted (input pieces that
     cut through themselves, which no boolean defines)."""
@@ -207,22 +124,6 @@ def _check_volume(composed: _Composed, pieces: Pieces, name: str) -> None:
                                f"not within 0..{solids:.6g} m³ (the solids together): some "
                                f"piece probably intersects itself; repair it, or inspect without "
                                f"--union (overlaps then count twice)")
-
-
-def _manifold(mf, w: Welded, rows: np.ndarray, reverse: bool):
-    """A manifold3d.Manifold of the triangles ``rows`` (float64 positions, their own vertices),
-    each result triangle tagged with the row it came from."""
-    uniq, local = np.unique(w.tri[rows], return_inverse=True)
-    tris = local.reshape(-1, 3)
-    if reverse:
-        tris = tris[:, ::-1]
-    return mf.Manifold(mf.Mesh64(vert_properties=np.ascontiguousarray(w.positions[uniq]),
-                                 tri_verts=np.ascontiguousarray(tris, dtype=np.uint64),
-                                 face_id=np.ascontiguousarray(rows, dtype=np.uint64)))
-
-
-def _boxes_meet(a: np.ndarray, b: np.ndarray) -> bool:
-    return bool(np.all(a[0] <= b[1]) and np.all(b[0] <= a[1]))
 
 
 # --- the result ----------------------------------------------------------------------------------

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.analysis import inspect_mesh
 from massprops.errors import DegenerateMeshError
 from massprops.inertia import parallel_axis, principal_axes, rotate_inertia
+from massprops.inspection.file import inspect_mesh
 from massprops.io import read_mesh
 from massprops.mesh import Mesh
 from massprops.robot.model import Geometry

@@ -5,7 +5,8 @@ edge a→b is balanced by as many b→a, with vertices identified by their COORD
 formats split vertices at UV seams; STL is unwelded soup). What has one right answer is repaired
 (whole mesh inside out, an inverted part, inconsistent winding); what has none (holes, one-sided
 surfaces) is refused, or computed with warnings under ``allow_open``. The kernels are in
-`massprops.weld`, `massprops.surface` and `massprops.nesting`; this module decides and explains.
+`massprops.mesh.weld`, `massprops.mesh.topology`, `massprops.mesh.geometry` and
+`massprops.mesh.nesting`; this module decides and explains.
 """
 
 from __future__ import annotations
@@ -17,22 +18,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from massprops.errors import DegenerateMeshError, MeshFormatError, MeshTopologyError
-from massprops.mesh import Mesh
-from massprops.surface import (
-    Edges,
-    area_vector_sums,
-    connected_components,
-    consistent_flips,
-    edges,
-    exactly_flat,
-    is_soup,
-    signed_volumes6,
-)
+from massprops.mesh.geometry import area_vector_sums, exactly_flat, signed_volumes6
+from massprops.mesh.topology import Edges, connected_components, consistent_flips, edges, is_soup
+from massprops.mesh.value import Mesh
+from massprops.mesh.weld import near_groups, weld
 from massprops.tolerances import EPS, EPS32, NEAR_WELD_ULPS
-from massprops.weld import near_groups, weld
 
 if TYPE_CHECKING:  # imported where a repair needs it: most meshes never do
-    from massprops.nesting import Plan
+    from massprops.mesh.nesting import Plan
 
 
 @dataclass(frozen=True)
@@ -481,7 +474,7 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
     if a.closed and a.n_comp == 1 and volumes[0] > 0:  # the fast path: nothing to repair
         return mesh, _health(mesh, a, volumes, warnings=crack_notes + _shape_notes(a),
                              weld=cracks)
-    from massprops.nesting import Plan, orientation_plan, sample_windings
+    from massprops.mesh.nesting import Plan, orientation_plan, sample_windings
     rewind = np.zeros(mesh.faces.shape[0], bool)
     if not a.oriented and int(a.edges.uses.max()) <= 2:
         flips = consistent_flips(a.tri[a.valid], a.reps.size)
@@ -497,7 +490,7 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
     if not closed:
         if not allow_open:
             n_open = a.edges.count("open" if rewind.any() else "unbalanced")
-            from massprops.repair.holes import describe_holes  # the error path only
+            from massprops.mesh.boundary import describe_holes  # the error path only
 
             holes = describe_holes(a.edges, mesh.vertices[a.reps],
                                    area_vector_sums(mesh.vertices, mesh.faces)[1],
@@ -527,7 +520,7 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
     flip = rewind ^ np.append(plan.flip, False)[a.face_comp]  # face_comp -1: no component
     fixed = _reverse(mesh, flip) if flip.any() else mesh
     if (plan.overlaps or plan.crossings) and not unioned:  # measured; lazily: rare, costly
-        from massprops.repair.union import overlap_warning
+        from massprops.mesh.overlap import overlap_warning
 
         warnings.append(overlap_warning(fixed, volumes * np.where(plan.flip, -1.0, 1.0),
                                         plan.overlaps + plan.crossings))

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from massprops.surface import winding_numbers
+from massprops.mesh.geometry import winding_numbers
 
 SAMPLE_BUDGET = 1 << 22
 """Point-triangle pairs to spend per piece: each piece gives SAMPLE_BUDGET // m sample vertices,

@@ -1,6 +1,6 @@
 """Which triangles meet at each edge, and the pieces a surface falls into when it is cut at every
 edge that is not shared by exactly two triangles running opposite ways (the repairs' own view of
-a mesh's topology; `massprops.health` decides and explains, this module serves the repairs)."""
+a mesh's topology; `massprops.mesh.health` decides and explains, this module serves the repairs)."""
 
 from __future__ import annotations
 
@@ -9,9 +9,10 @@ from functools import cached_property
 
 import numpy as np
 
-from massprops.mesh import Mesh
-from massprops.surface import connected_components, signed_volumes6
-from massprops.weld import weld
+from massprops.mesh.geometry import signed_volumes6
+from massprops.mesh.topology import connected_components
+from massprops.mesh.value import Mesh
+from massprops.mesh.weld import weld
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,7 +47,7 @@ class EdgeUses:
 @dataclass(frozen=True, eq=False)
 class Welded:
     """A mesh's triangles on welded ids: tri (m, 3) ids, valid (m,) three distinct ids, reps (u,)
-    a vertex row per id (see `massprops.weld.weld`)."""
+    a vertex row per id (see `massprops.mesh.weld.weld`)."""
 
     mesh: Mesh
     tri: np.ndarray

@@ -1,8 +1,8 @@
 """The blocked pass over a mesh's faces: tetrahedron totals about an origin, with fast or
 double-double determinants, and what the error bounds need to know about their rounding.
 
-Internal to ``massprops.mass`` (which documents the method); split out to keep each module to one
-job. Per face (a, b, c) and origin o, primes meaning "minus o": d = det(a', b', c'),
+Internal to ``massprops.mesh.integral`` (which documents the method); split out to keep each
+module to one job. Per face (a, b, c) and origin o, primes meaning "minus o": d = det(a', b', c'),
 s = a' + b' + c'; the totals are Σd, Σd s_i, Σd f_i, Σd q_ij (see ``FaceSums``).
 """
 
@@ -15,8 +15,8 @@ from typing import NamedTuple
 import numpy as np
 
 from massprops.errors import ComputationError, MeshFormatError
-from massprops.mesh import Mesh
-from massprops.surface import is_soup
+from massprops.mesh.topology import is_soup
+from massprops.mesh.value import Mesh
 
 U = 2.0**-53
 """Unit round-off of float64."""

@@ -5,7 +5,7 @@ about a local origin o; with primes meaning "minus o", d = det(a', b', c') and s
   ∫1 = d/6,  ∫x_i = d s_i/24,  ∫x_i x_j = d (a'_i a'_j + b'_i b'_j + c'_i c'_j + s_i s_j)/120.
 The totals about o are moved to the centre of mass by the parallel-axis theorem, so coordinates
 far from the world origin cost nothing (the usual integral about (0, 0, 0) loses
-(distance / size)² × 1e-16). The pass over the faces lives in ``massprops.facesums``: blocks
+(distance / size)² × 1e-16). The pass over the faces lives in ``massprops.mesh.facesums``: blocks
 of faces, each total a numpy pairwise sum per block and math.fsum over the blocks.
 
 The origin is the centre of a vertex sample's bounding box, or the estimated COM when Σ|d| shows
@@ -32,9 +32,9 @@ from typing import NamedTuple
 import numpy as np
 
 from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError
-from massprops.facesums import FaceSums, U, det_error, face_sums, gamma, reach_of, sum_depth
 from massprops.inertia import parallel_axis_to_com, principal_axes
-from massprops.mesh import Mesh
+from massprops.mesh.facesums import FaceSums, U, det_error, face_sums, gamma, reach_of, sum_depth
+from massprops.mesh.value import Mesh
 from massprops.tolerances import MIN_VOLUME_TO_ERROR
 
 __all__ = ["ErrorBars", "MassProperties", "Uncertainty", "UnitMoments", "mass_properties",

@@ -7,10 +7,10 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, BinaryIO
 
 from massprops.errors import MassPropsError
-from massprops.health import MeshHealth, prepare_mesh
 from massprops.io import read_mesh
-from massprops.mass import MassProperties, mass_properties
 from massprops.mesh import Mesh
+from massprops.mesh.health import MeshHealth, prepare_mesh
+from massprops.mesh.integral import MassProperties, mass_properties
 from massprops.parallel import in_background
 
 if TYPE_CHECKING:

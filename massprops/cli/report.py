@@ -59,8 +59,9 @@ def _bar(e: np.ndarray | float) -> str:
 
 def inspection_renderable(data: dict, repaired: Iterable[str] | None = None) -> Group:
     """A rich renderable for one inspection, given as its JSON object
-    (`massprops.analysis.Inspection.as_dict`, or a batch record's ``data``). ``repaired``: the
-    keys of ``data["repairs"]`` to list (the repairs that were asked for; default: all)."""
+    (`massprops.inspection.file.Inspection.as_dict`, or a batch record's ``data``).
+    ``repaired``: the keys of ``data["repairs"]`` to list (the repairs that were asked for;
+    default: all)."""
     bars = [b for b in (data["uncertainty"]["rounding"], data["uncertainty"]["input"],
                         data["uncertainty"].get("repair")) if b is not None]
 

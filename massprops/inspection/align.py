@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from massprops.mass import MassProperties
 from massprops.mesh import Mesh
+from massprops.mesh.integral import MassProperties
 
 
 @dataclass(frozen=True, eq=False)

@@ -8,17 +8,13 @@ from collections.abc import Callable
 
 import numpy as np
 
+from massprops.mesh.topology import connected_components, id_dtype
 from massprops.parallel import in_halves, sort_in_two
 
 _HASH_MULTIPLIERS = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9),
                      np.uint64(0x94D049BB133111EB))  # odd splitmix64 constants, one per axis
 _FINAL_MULTIPLIER = np.uint64(0xD6E8FEB86659FD93)
 _CHUNK = 1 << 15  # rows per block of chunked passes: a block's temporaries stay in L2
-
-
-def id_dtype(n: int) -> type:
-    """Narrowest index type for ids below n: int32 halves memory traffic against int64."""
-    return np.int32 if n < 2**31 else np.int64
 
 
 # --- weld: file vertices -> distinct positions ---------------------------------------------------
@@ -193,8 +189,6 @@ def near_groups(points: np.ndarray, tol: float) -> np.ndarray:
     pairs = cKDTree(points).query_pairs(tol, p=np.inf, output_type="ndarray")
     if not pairs.size:
         return np.arange(k)
-    from massprops.surface import connected_components
-
     label = connected_components(k, pairs[:, 0], pairs[:, 1]).astype(np.int64)
     low = np.full((k, 3), np.inf)
     high = np.full((k, 3), -np.inf)
