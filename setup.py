@@ -31,7 +31,7 @@ class BuildWithKernels(build_py):
         try:
             with tempfile.TemporaryDirectory() as scratch:  # keeps the builder's home untouched
                 env["NUMBA_CACHE_DIR"] = scratch
-                subprocess.run([sys.executable, "-m", "massprops.dynamics.compiled.prebuilt"],
+                subprocess.run([sys.executable, "-m", "massprops.dynamics.compiled.build"],
                                env=env, cwd=build_lib, check=True, timeout=1800)
         except (OSError, subprocess.SubprocessError) as exc:
             print(f"massprops: kernels not prebuilt ({exc}); the first run compiles them",

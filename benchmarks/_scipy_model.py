@@ -22,9 +22,9 @@ import numpy as np
 from _scipy_rhs import NumpyRhs, cross
 from scipy.integrate import solve_ivp
 
-from massprops.dynamics.forces import compile_forces, rhs
-from massprops.dynamics.frames import initial_principal_state
+from massprops.dynamics.forces import rhs
 from massprops.dynamics.model import Drag, Gravity, PointForce, Scene, Spring, Torque
+from massprops.dynamics.program import compile_forces, initial_principal_state
 
 SCIPY_MIN_RTOL = 100 * np.finfo(float).eps
 """solve_ivp raises rtol below this to this (with a warning): ladders stop here."""

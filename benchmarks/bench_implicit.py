@@ -54,8 +54,8 @@ def _unstack(a: np.ndarray):
 def reference(scene_path: str, cache: Path | None, samples: int):
     """(truth, its own accuracy) in the contract's metric, from the cache when it matches."""
     from massprops.dynamics.accuracy import Scales, state_error
-    from massprops.dynamics.forces import compile_forces
     from massprops.dynamics.integrators import INTEGRATORS
+    from massprops.dynamics.program import compile_forces
     from massprops.dynamics.runner import run_once
     from massprops.dynamics.scene import load_scene
 
@@ -85,8 +85,8 @@ def measure(scene_path: str, factors: list[float], samples: int, reference_file:
     """One process: every factor once (compiled warm first), error against the cached truth."""
     from massprops.dynamics.accuracy import Scales, state_error
     from massprops.dynamics.compiled.compiling import prepare
-    from massprops.dynamics.forces import compile_forces
     from massprops.dynamics.integrators import INTEGRATORS
+    from massprops.dynamics.program import compile_forces
     from massprops.dynamics.runner import run_once
     from massprops.dynamics.scene import load_scene
     from massprops.dynamics.simulate import default_step

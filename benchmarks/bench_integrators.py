@@ -30,7 +30,6 @@ from _scipy_model import check_same_equations
 from _scipy_model import numpy_rhs as numpy_rhs_of
 from scipy.integrate import solve_ivp
 
-from massprops.dynamics.forces import compile_forces
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.model import (
     Gravity,
@@ -43,6 +42,7 @@ from massprops.dynamics.model import (
     TimeSettings,
     Torque,
 )
+from massprops.dynamics.program import compile_forces
 
 MASS, MOMENTS = 2.0, np.array([1.0, 2.0, 3.0])
 G = np.array([0.0, 0.0, -9.81])

@@ -34,10 +34,10 @@ import numpy as np
 from _lagrange_reference import LagrangeReference
 
 from massprops.dynamics.accuracy import Scales, state_error
-from massprops.dynamics.forces import compile_forces
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.precision import MIN_TIMED_S
+from massprops.dynamics.program import compile_forces
 from massprops.dynamics.runner import run_once
 from massprops.dynamics.scene import load_scene, parse_scene
 from massprops.dynamics.simulate import simulate

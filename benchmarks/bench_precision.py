@@ -41,7 +41,6 @@ from _scenes import SCENES, SceneCase
 from _workprecision_plot import plot_scene
 
 from massprops.dynamics.accuracy import Scales, state_error
-from massprops.dynamics.forces import compile_forces
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.precision import (
@@ -52,6 +51,7 @@ from massprops.dynamics.precision import (
     precision,
     reference_run,
 )
+from massprops.dynamics.program import compile_forces
 from massprops.dynamics.scene import load_scene
 
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")

@@ -39,10 +39,10 @@ import numpy as np
 from _scenes import LONG_DRAG, SCENES
 
 from massprops.dynamics.accuracy import ADAPTIVE_TIGHTENING, Scales, state_error
-from massprops.dynamics.forces import compile_forces
-from massprops.dynamics.frames import initial_principal_state, to_world
+from massprops.dynamics.frames import to_world
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.precision import reference_run
+from massprops.dynamics.program import compile_forces, initial_principal_state
 from massprops.dynamics.runner import run_once
 from massprops.dynamics.scene import load_scene
 
@@ -118,7 +118,7 @@ def best_wall(run, rtol: float, repeat: int) -> float:
 def cold_compile_seconds(scene_path: Path) -> float:
     """Warm-up of our dop853 in a fresh process with an empty numba cache: a real compile."""
     code = ("import sys, numpy as np; from massprops.dynamics.scene import load_scene; "
-            "from massprops.dynamics.forces import compile_forces; "
+            "from massprops.dynamics.program import compile_forces; "
             "from massprops.dynamics.integrators import INTEGRATORS; "
             "from massprops.dynamics.runner import run_once; "
             "s = load_scene(sys.argv[1]); "

@@ -65,8 +65,8 @@ def body(moments=(1.0, 2.0, 3.0), mass=2.0):
 
 def program_for(forces, rigid=None):
     """The compiled force program of ``forces`` acting on ``rigid`` (default `body()`)."""
-    from massprops.dynamics.forces import compile_forces
     from massprops.dynamics.model import InitialState, OutputSettings, Scene, TimeSettings
+    from massprops.dynamics.program import compile_forces
 
     scene = Scene(rigid or body(), InitialState(), tuple(forces), TimeSettings(1.0),
                   OutputSettings())

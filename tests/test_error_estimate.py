@@ -113,7 +113,7 @@ def _spec(name):
 
 
 def _program(sc):
-    from massprops.dynamics.forces import compile_forces
+    from massprops.dynamics.program import compile_forces
     return compile_forces(sc)
 
 

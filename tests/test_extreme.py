@@ -85,7 +85,7 @@ def test_needle_precision_cli_json(run, tmp_path):
 def test_a_diverged_companion_leaves_no_zero_quaternion():
     """rk4 at 4x the coarse needle rung overflows: the quaternion used to be divided by inf into
     [0, 0, 0, 0] (finite) and reached the frames as a 'state'. Now the run fails there."""
-    from massprops.dynamics.forces import compile_forces
+    from massprops.dynamics.program import compile_forces
     from massprops.dynamics.runner import run_once, unusable_rows
 
     sc = scene(NEEDLE, duration=2.0, omega=(1000.0, 1.0, 0.5))

@@ -135,7 +135,7 @@ def test_kernels_built_with_the_package_load_without_compiling_wherever_it_is_in
     shutil.copytree(ROOT / "massprops", tmp_path / "build" / "massprops", ignore=ignore)
     env = dict(os.environ, PYTHONPATH=str(tmp_path / "build"),
                NUMBA_CACHE_DIR=str(tmp_path / "scratch"))
-    subprocess.run([sys.executable, "-m", "massprops.dynamics.compiled.prebuilt", "--only", "rk4"],
+    subprocess.run([sys.executable, "-m", "massprops.dynamics.compiled.build", "--only", "rk4"],
                    cwd=tmp_path, env=env, check=True, capture_output=True, timeout=240)
     shutil.copytree(tmp_path / "build" / "massprops", tmp_path / "site" / "massprops")
     scene = tmp_path / "torqued.yaml"

@@ -21,9 +21,9 @@ import yaml
 from scipy.special import ellipkm1
 
 from massprops.dynamics import precision as precision_module
-from massprops.dynamics.forces import compile_forces
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.precision import precision
+from massprops.dynamics.program import compile_forces
 from massprops.dynamics.scene import load_scene
 from massprops.dynamics.simulate import choose_integrator, simulate
 from massprops.errors import DivergenceError

@@ -11,7 +11,6 @@ import pytest
 
 from massprops.dynamics import simulate as sim
 from massprops.dynamics.accuracy import companion_settings
-from massprops.dynamics.forces import compile_forces
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.model import (
     Drag,
@@ -23,6 +22,7 @@ from massprops.dynamics.model import (
     TimeSettings,
     Torque,
 )
+from massprops.dynamics.program import compile_forces
 from massprops.errors import DivergenceError
 from massprops.parallel import CancellableJob
 

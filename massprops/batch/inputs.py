@@ -43,6 +43,7 @@ class BadInput(NamedTuple):
 @lru_cache(maxsize=1)
 def mesh_extensions() -> frozenset[str]:
     """Lower-case extensions (with the dot) of every format massprops reads."""
+    # deferred: the readers' registry loads the readers; listing paths needs it once
     from massprops.io.registry import FORMATS
 
     return frozenset(ext for f in FORMATS.values() if f.reader is not None
@@ -52,6 +53,7 @@ def mesh_extensions() -> frozenset[str]:
 @lru_cache(maxsize=1)
 def _secondary_parts() -> dict[str, str]:
     """Extension of a later part of a multi-file format -> extension of its first part."""
+    # deferred: the readers' registry loads the readers; listing paths needs it once
     from massprops.io.registry import FORMATS
 
     return {ext: f.parts[0][0] for f in FORMATS.values() if f.parts

@@ -42,6 +42,7 @@ def local_pool(jobs: int) -> ProcessPoolExecutor:
         forkserver.ensure_running()  # boots in the background until the first worker is due
     else:
         context = multiprocessing.get_context("spawn")
+    # deferred: a batch too small for a pool never loads the worker side
     from massprops.batch.worker import init_local_worker
 
     return ProcessPoolExecutor(jobs, mp_context=context, initializer=init_local_worker)

@@ -77,6 +77,7 @@ def inspect_one(path: str | os.PathLike, options: dict[str, Any], *, name: str |
     `massprops.inspection.file.inspect_file` keyword ``options``; any error becomes the record's
     `ErrorInfo` (KeyboardInterrupt propagates). ``name``: what messages call it (default: the
     path as given)."""
+    # deferred: the parent of a pool never inspects; workers and jobs=1 load the mesh code
     from massprops.inspection.file import inspect_file
 
     stdin = os.fspath(path) == "-"

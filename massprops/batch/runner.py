@@ -97,6 +97,7 @@ def inspect_many(paths: Iterable, executor: Executor | None = None, *, jobs: int
 
 
 def _check_options(options: dict[str, Any]) -> None:
+    # deferred: a batch run in this process loads no pool or worker code
     from massprops.inspection.file import inspect_file
 
     code = inspect_file.__code__
@@ -117,6 +118,7 @@ class Batch(Iterator[MeshResult]):
 
     def __init__(self, paths: Iterable, executor: Executor | None, jobs: int | None,
                  options: dict[str, Any], workers: int | None, chunk_s: float | None) -> None:
+        # deferred: a batch run in this process loads no pool or worker code
         from massprops.batch.pool import default_jobs
 
         self._paths = iter(paths)
@@ -227,6 +229,7 @@ class Batch(Iterator[MeshResult]):
         return inspect_one(item, self._options, keep_exception=True)
 
     def _new_pool(self) -> None:
+        # deferred: a batch run in this process loads no pool or worker code
         from massprops.batch.pool import local_pool
 
         self._executor = local_pool(self._workers)
@@ -281,6 +284,7 @@ class Batch(Iterator[MeshResult]):
             free -= 1
 
     def _submit(self, slot: _Slot) -> None:
+        # deferred: a batch run in this process loads no pool or worker code
         from concurrent.futures import BrokenExecutor, Future
 
         from massprops.batch.worker import run_chunk
@@ -370,6 +374,7 @@ class Batch(Iterator[MeshResult]):
     def _replace_pool(self, keep: _Slot | None = None) -> None:
         """A local worker died: the pool is broken. Start a new one and resubmit every task
         that was still out on the old one (its results are lost with it), but ``keep``."""
+        # deferred: a batch run in this process loads no pool or worker code
         from massprops.batch.pool import stop_pool
 
         old = self._executor
@@ -414,6 +419,7 @@ class Batch(Iterator[MeshResult]):
                 slot.future.cancel()
         self._slots.clear()
         if self._own_pool:
+            # deferred: a batch run in this process loads no pool or worker code
             from massprops.batch.pool import stop_pool
 
             if hard:

@@ -25,6 +25,7 @@ def align(ctx: click.Context, input_path: str, output_path: str, force: bool, as
     options = inspect_kwargs(mesh_options)
 
     def run() -> None:
+        # deferred: each command imports only what it runs (start-up of the others)
         from massprops.inspection.align import align_mesh
         from massprops.inspection.file import inspect_file
         from massprops.io import write_mesh
@@ -39,6 +40,7 @@ def align(ctx: click.Context, input_path: str, output_path: str, force: bool, as
             emit_json({"input": input_path, "output": output_path, **aligned.as_dict(),
                        **({} if repairs is None else {"repairs": repairs})})
         else:
+            # deferred: rich loads only for human-readable output
             from massprops.cli.report import print_alignment
 
             print_alignment(input_path, output_path, aligned, result.repairs)

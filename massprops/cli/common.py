@@ -131,6 +131,7 @@ def repair_options(fill_holes: bool, max_hole: float | None, union: bool, shell:
         raise click.UsageError("--max-hole applies to --fill-holes; add --fill-holes")
     if not (fill_holes or union or shell is not None):
         return None
+    # deferred: each command imports only what it runs (start-up of the others)
     from massprops.repair import RepairOptions
 
     return RepairOptions(union=union, shell=shell, fill_holes=fill_holes, max_hole=max_hole)

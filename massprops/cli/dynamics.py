@@ -32,6 +32,7 @@ class RegistryChoice(click.ParamType):
 
 
 def _integrator_names() -> tuple[str, ...]:
+    # deferred: each command imports only what it runs (start-up of the others)
     from massprops.dynamics.integrators import integrator_names
 
     return integrator_names()
@@ -92,12 +93,14 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
     interrupted = []
 
     def run() -> None:
+        # deferred: each command imports only what it runs (start-up of the others)
         from massprops.dynamics.compiled.compiling import whole_process
         from massprops.dynamics.scene import load_scene
         from massprops.dynamics.simulate import simulate as run_scene
         from massprops.errors import DivergenceError, RunBudgetError
 
         if plot_path:
+            # deferred: matplotlib (the plot extra) loads only for --plot
             from massprops.dynamics.plots import require_matplotlib
 
             require_matplotlib()
@@ -127,6 +130,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         if as_json:
             emit_json(result.as_dict())
         else:
+            # deferred: rich loads only for human-readable output
             from massprops.cli.report import print_simulation
 
             print_simulation(scene, result)
@@ -158,11 +162,13 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
     measured against the exact solution or a much tighter, checked reference run."""
 
     def run() -> None:
+        # deferred: each command imports only what it runs (start-up of the others)
         from massprops.dynamics.compiled.compiling import whole_process
         from massprops.dynamics.precision import precision as run_ladders
         from massprops.dynamics.scene import load_scene
 
         if plot_path:
+            # deferred: matplotlib (the plot extra) loads only for --plot
             from massprops.dynamics.plots import require_matplotlib
 
             require_matplotlib()
@@ -175,6 +181,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
         finally:
             progress.close()
         if plot_path:
+            # deferred: matplotlib (the plot extra) loads only for --plot
             from massprops.dynamics.plots import plot_precision
 
             plot_precision(report, plot_path, title=scene_path, force=force,
@@ -182,6 +189,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
         if as_json:
             emit_json(report.as_dict())
         else:
+            # deferred: rich loads only for human-readable output
             from massprops.cli.report import print_precision
 
             print_precision(scene_path, report)
@@ -192,10 +200,12 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
 def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
           protect: list) -> None:
     if trajectory_path:
+        # deferred: each command imports only what it runs (start-up of the others)
         from massprops.dynamics.trajectory import write_trajectory
 
         write_trajectory(result.trajectory, trajectory_path, force=force, protect=protect)
     if plot_path:
+        # deferred: matplotlib (the plot extra) loads only for --plot
         from massprops.dynamics.plots import plot_simulation
 
         plot_simulation(result, plot_path, force=force, protect=protect)

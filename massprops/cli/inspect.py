@@ -78,6 +78,7 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
     if scheduler is not None and jobs is not None:
         raise click.UsageError("--jobs and --scheduler contradict: the cluster's workers run "
                                "the batch; give one")
+    # deferred: each command imports only what it runs (start-up of the others)
     from massprops.batch import dask_executor, expand_inputs, inspect_many
     from massprops.batch.inputs import stands_for_many
 
@@ -99,6 +100,7 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
     finally:
         if client is not None:
             client.close()
+        # deferred: each command imports only what it runs (start-up of the others)
         from massprops.batch.pool import end_helper_processes
 
         end_helper_processes()
@@ -113,6 +115,7 @@ def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool
 
     progress = None
     if not quiet and sys.stderr.isatty():
+        # deferred: rich loads only for human-readable output
         from massprops.cli.report import BatchProgress
 
         progress = BatchProgress()
@@ -141,6 +144,7 @@ def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool
     try:
         with ctrl_c.deferred():
             if out_format == "csv":
+                # deferred: csv loads only for --format csv
                 from massprops.batch.table import csv_header
 
                 _to_stdout(lambda: _echo_text(csv_header()))
@@ -219,6 +223,7 @@ def _show_record(ctx: click.Context, record: Any, out_format: str, principal: bo
             raise error.exception or RemoteError(error.traceback or error.message)
         say_error(error.message)
         if out_format == "csv":
+            # deferred: csv loads only for --format csv
             from massprops.batch.table import csv_row
 
             _to_stdout(lambda: _echo_text(csv_row(record)))
@@ -230,10 +235,12 @@ def _show_record(ctx: click.Context, record: Any, out_format: str, principal: bo
         if out_format == "json":
             _to_stdout(lambda: emit_json(record.data))
         elif out_format == "csv":
+            # deferred: csv loads only for --format csv
             from massprops.batch.table import csv_row
 
             _to_stdout(lambda: _echo_text(csv_row(record)))
         elif out_format in ELEMENT_FORMATS:
+            # deferred: only --format urdf|sdf|mjcf writes elements
             from massprops.robot.elements import WRITERS
 
             d = record.data
@@ -242,6 +249,7 @@ def _show_record(ctx: click.Context, record: Any, out_format: str, principal: bo
                                           principal=principal)
             _to_stdout(lambda: click.echo(element))
         else:
+            # deferred: rich loads only for human-readable output
             from massprops.cli.report import print_inspection
 
             _to_stdout(lambda: print_inspection(record.data, record.repaired))

@@ -35,6 +35,7 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
     link_errors = []
 
     def run() -> None:
+        # deferred: each command imports only what it runs (start-up of the others)
         from massprops.robot.analyze import analyze_model
 
         report = analyze_model(description, source=source, density=density,
@@ -48,6 +49,7 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
             for r in report.links:
                 emit_json(r.as_dict(description))
         else:
+            # deferred: rich loads only for human-readable output
             from massprops.cli.report import print_model
 
             print_model(report, rtol)

@@ -96,13 +96,10 @@ def _arm(body: RigidBody, point: np.ndarray | None) -> np.ndarray:
     return body.principal_axes.T @ (np.asarray(point) - body.center_of_mass)
 
 
-def compile_forces(scene: Scene) -> ForceProgram:
-    """Turn the scene's force terms into a `ForceProgram` (one row per term, in scene order).
-    A body held by joints gets the program of its equivalent pinned body (dynamics.joints)."""
-    if scene.joints:
-        from massprops.dynamics.joints.reduction import compile_held
-
-        return compile_held(scene)
+def compile_free_forces(scene: Scene) -> ForceProgram:
+    """Turn the force terms of a scene's free body into a `ForceProgram` (one row per term, in
+    scene order). Joints are not looked at: `massprops.dynamics.program.compile_forces` is the
+    entry for any scene."""
     body = scene.body
     to_principal = body.principal_axes.T  # body -> principal
     i_min = float(body.principal_moments[0])

@@ -44,13 +44,9 @@ class Trajectory:
                 "joints": [joint.row(i) for joint in self.joints]}
 
 
-def initial_principal_state(scene: Scene) -> np.ndarray:
-    """(13,) [r, v, q_p, omega'] at t = 0 from the scene's world/body initial values (a body
-    held by joints: of its equivalent pinned body, massprops.dynamics.joints)."""
-    if scene.joints:
-        from massprops.dynamics.joints.reduction import model_of
-
-        return model_of(scene).y0.copy()
+def initial_free_state(scene: Scene) -> np.ndarray:
+    """(13,) [r, v, q_p, omega'] at t = 0 from the free body's world/body initial values (joints
+    not looked at: `massprops.dynamics.program.initial_principal_state` is the entry)."""
     body, ini = scene.body, scene.initial
     q_r = matrix_to_quat(body.principal_axes)  # principal -> body
     q_p = canonical(quat_multiply(ini.orientation, q_r))

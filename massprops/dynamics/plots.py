@@ -28,6 +28,7 @@ def _pyplot():
 def save_figure(fig, path: str | Path, *, force: bool = False, protect=()) -> None:
     """Render ``fig`` as PNG and write it atomically (never over an input or, without force, an
     existing file)."""
+    # deferred: file writing is needed only when a figure is saved
     import io
 
     from massprops.io.atomic import atomic_write_bytes

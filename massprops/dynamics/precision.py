@@ -17,9 +17,10 @@ import numpy as np
 
 from massprops.dynamics.accuracy import Scales, exact_roundoff, global_estimate, state_error
 from massprops.dynamics.compiled.compiling import prepare
-from massprops.dynamics.forces import ForceProgram, compile_forces
+from massprops.dynamics.forces import ForceProgram
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.model import Scene
+from massprops.dynamics.program import compile_forces
 from massprops.dynamics.runner import run_once
 from massprops.dynamics.simulate import choose_integrator, default_step, simulate
 from massprops.errors import ComputationError, MassPropsError, UsageError
@@ -109,6 +110,7 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
 
     notice(text) is called once if compiled kernels are missing from numba's cache and are being
     compiled (all of them are made ready first: massprops.dynamics.compiled.compiling.prepare)."""
+    # deferred: the registry imports every method's module; loaded when a run starts
     from massprops.dynamics.integrators import INTEGRATORS
 
     program = compile_forces(scene)

@@ -16,9 +16,9 @@ import numpy as np
 
 from massprops.dynamics import budget
 from massprops.dynamics.forces import ForceProgram
-from massprops.dynamics.frames import initial_principal_state
 from massprops.dynamics.integrators.base import STATUS_STEP_LIMIT
 from massprops.dynamics.model import Scene
+from massprops.dynamics.program import initial_principal_state
 from massprops.errors import ComputationError
 
 CHUNK_STEPS = 50_000

@@ -363,6 +363,7 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
     forces = _forces(fields.get("forces"))
     joints, joint_fields = parse_joints(fields.get("joints"))
     if known_integrators is None:
+        # deferred: the registry imports every method's module; reading a scene needs only its names
         from massprops.dynamics.integrators import integrator_names
 
         known_integrators = integrator_names()

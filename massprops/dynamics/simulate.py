@@ -28,10 +28,10 @@ from massprops.dynamics.forces import (
     TORQUE_BODY,
     TORQUE_WORLD,
     ForceProgram,
-    compile_forces,
 )
 from massprops.dynamics.frames import Trajectory, to_world
 from massprops.dynamics.model import Scene
+from massprops.dynamics.program import compile_forces
 from massprops.dynamics.runner import RawRun, run_once, stability_hint
 from massprops.dynamics.stiffness import unresolved, unresolved_mode_error
 from massprops.errors import DivergenceError, RunBudgetError, UsageError
@@ -140,6 +140,7 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     Raises DivergenceError (exit 3) naming the time and the likely cause, RunBudgetError (exit 3)
     when the run bound refuses or stops the run (both carry what was computed).
     """
+    # deferred: the registry imports every method's module; loaded when a run starts
     from massprops.dynamics.integrators import INTEGRATORS
 
     program = compile_forces(scene)

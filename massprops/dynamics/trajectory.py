@@ -75,6 +75,7 @@ def trajectory_bytes(traj, suffix: str) -> bytes:
 def write_trajectory(traj, path: str | Path, *, force: bool = False, protect=()) -> None:
     """Write ``traj`` to ``path`` (.csv or .npz) atomically; refuses to replace an input or an
     existing file unless ``force`` (OutputExistsError)."""
+    # deferred: file writing is needed only when a trajectory is saved
     from massprops.io.atomic import atomic_write_bytes
 
     path = Path(path)

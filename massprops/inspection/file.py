@@ -71,7 +71,7 @@ def inspect_mesh(mesh: Mesh, *, density: float | None = None, mass: float | None
     first (`massprops.repair`); none asked, the repair code is never imported.
     """
     if repairs is not None and repairs.any:
-        from massprops.repair.pipeline import repair_and_integrate
+        from massprops.repair.pipeline import repair_and_integrate  # deferred: repairs only
 
         done = repair_and_integrate(mesh, repairs, density=density, mass=mass,
                                     allow_open=allow_open)

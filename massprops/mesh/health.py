@@ -474,6 +474,7 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
     if a.closed and a.n_comp == 1 and volumes[0] > 0:  # the fast path: nothing to repair
         return mesh, _health(mesh, a, volumes, warnings=crack_notes + _shape_notes(a),
                              weld=cracks)
+    # deferred: only meshes of several pieces or with open edges get here
     from massprops.mesh.nesting import Plan, orientation_plan, sample_windings
     rewind = np.zeros(mesh.faces.shape[0], bool)
     if not a.oriented and int(a.edges.uses.max()) <= 2:
@@ -520,6 +521,7 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
     flip = rewind ^ np.append(plan.flip, False)[a.face_comp]  # face_comp -1: no component
     fixed = _reverse(mesh, flip) if flip.any() else mesh
     if (plan.overlaps or plan.crossings) and not unioned:  # measured; lazily: rare, costly
+        # deferred: only meshes of several pieces or with open edges get here
         from massprops.mesh.overlap import overlap_warning
 
         warnings.append(overlap_warning(fixed, volumes * np.where(plan.flip, -1.0, 1.0),

@@ -37,6 +37,7 @@ def repair_and_integrate(mesh: Mesh, options: RepairOptions, *, density: float |
     holes = None
     crack_notes: list[str] = []
     if options.fill_holes:
+        # deferred: each repair loads only when asked for
         from massprops.repair.holes import fill_holes
 
         # round-off cracks are welded, not capped: only the real holes are left to fill
@@ -49,6 +50,7 @@ def repair_and_integrate(mesh: Mesh, options: RepairOptions, *, density: float |
         solid = holes.regions
     union = None
     if options.union:
+        # deferred: each repair loads only when asked for
         from massprops.repair.union import union_mesh
 
         fixed, health = prepare_mesh(mesh, allow_open=allow_open, unioned=True)
@@ -60,6 +62,7 @@ def repair_and_integrate(mesh: Mesh, options: RepairOptions, *, density: float |
     else:
         health = check_mesh(mesh)
     if options.shell is not None:
+        # deferred: each repair loads only when asked for
         from massprops.repair.shell import shell_properties
 
         united = mass_properties(mesh).volume if options.union else None
@@ -80,6 +83,7 @@ def repair_and_integrate(mesh: Mesh, options: RepairOptions, *, density: float |
     if holes is not None:
         warnings += holes.warnings
     if union is not None:
+        # deferred: each repair loads only when asked for
         from massprops.repair.union import finished
 
         volume = united if options.shell is not None else props.volume

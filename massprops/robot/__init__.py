@@ -19,11 +19,11 @@ __all__ = ["analyze_model", "load_model", "ModelReport", "LinkReport", "WRITERS"
 def __getattr__(name: str):
     # lazy: `import massprops.robot.elements` must not pull in the parsers and the mesh code
     if name in ("analyze_model", "load_model", "ModelReport", "LinkReport"):
-        from massprops.robot import analyze
+        from massprops.robot import analyze  # lazy, as above
 
         return getattr(analyze, name)
     if name == "WRITERS":
-        from massprops.robot.elements import WRITERS
+        from massprops.robot.elements import WRITERS  # lazy, as above
 
         return WRITERS
     raise AttributeError(f"module 'massprops.robot' has no attribute {name!r}")

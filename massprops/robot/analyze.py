@@ -105,6 +105,7 @@ class ModelReport:
     def write(self, out: str | os.PathLike, *, force: bool = False) -> int:
         """Write the description with every computed link's inertial replaced or added;
         returns how many were written. Atomic, never over the input."""
+        # deferred: a description loads only its own format's parser
         from massprops.robot.writeback import edited_bytes, write_description
 
         edits = [(r.link.node, r.link.inertial_node, r.computed) for r in self.links
@@ -126,10 +127,13 @@ def load_model(path: str | os.PathLike, *, source: str = "collision",
         raise RobotModelError(f"{p}:{root.line}: <{root.tag}>: not a robot description; expected "
                               "a root element <robot> (URDF), <sdf> (SDF) or <mujoco> (MJCF)")
     if fmt == "urdf":
+        # deferred: a description loads only its own format's parser
         from massprops.robot.urdf import parse_urdf as parse
     elif fmt == "sdf":
+        # deferred: a description loads only its own format's parser
         from massprops.robot.sdf import parse_sdf as parse
     else:
+        # deferred: a description loads only its own format's parser
         from massprops.robot.mjcf import parse_mjcf as parse
     return parse(root, data, p, source=source,
                  package_paths=[Path(d) for d in package_paths])

@@ -67,6 +67,7 @@ def mjcf_inertial(mass: float, center_of_mass, inertia, *, indent: str = "  ",
     ``principal``, quat (principal frame -> body, [w x y z]) and diaginertia (ascending)."""
     pos = f'pos="{_nums(center_of_mass)}" mass="{_num(mass)}"'
     if principal:
+        # deferred: writing a stated inertial needs no eigen-solver unless principal
         from massprops.inertia import principal_axes
         from massprops.rotation import matrix_to_quat
 
@@ -79,6 +80,7 @@ def mjcf_inertial(mass: float, center_of_mass, inertia, *, indent: str = "  ",
 
 def _no_principal(principal: bool, name: str) -> None:
     if principal:
+        # deferred: writing a stated inertial needs no eigen-solver unless principal
         from massprops.errors import UsageError
 
         raise UsageError(f"--principal is for --format mjcf (quat + diaginertia); {name} gets "

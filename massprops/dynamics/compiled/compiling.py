@@ -59,6 +59,7 @@ def whole_process(alone: bool = True) -> None:
 def compiled_names(names: Sequence[str]) -> list[str]:
     """The distinct compiled kernels behind ``names`` (integrator names), in order; the closed
     form and methods sharing a kernel drop out."""
+    # deferred: the registry imports the kernels' modules; needed only when preparing them
     from massprops.dynamics.integrators import INTEGRATORS
 
     out: list[str] = []
@@ -85,6 +86,7 @@ def prepare(names: Sequence[str], notice: Callable[[str], None] | None = None) -
     from numba.core import event
 
     if _whole_process:
+        # deferred: the registry imports the kernels' modules; needed only when preparing them
         from massprops.dynamics.compiled.jit import start_numba_lean
 
         start_numba_lean()
@@ -118,6 +120,7 @@ def prepare(names: Sequence[str], notice: Callable[[str], None] | None = None) -
 def warm_up(name: str) -> None:
     """Run integrator ``name`` for one tiny step on a stand-in problem whose arguments have the
     types of every real run (so the call loads or compiles the very kernel the runs use)."""
+    # deferred: the registry imports the kernels' modules; needed only when preparing them
     from massprops.dynamics.forces import GRAVITY, NPAR
     from massprops.dynamics.integrators import INTEGRATORS
 
@@ -204,6 +207,7 @@ def _spawn(kernels: list[str]) -> subprocess.Popen | None:
 
 def helper_main(kernels: list[str]) -> None:
     """The helper process: load or compile ``kernels`` into the shared cache, then exit."""
+    # deferred: the registry imports the kernels' modules; needed only when preparing them
     from massprops.dynamics.compiled.jit import start_numba_lean
 
     start_numba_lean()

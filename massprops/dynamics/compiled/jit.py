@@ -5,11 +5,11 @@ its top; only the stepping integrators import it (``massprops inspect`` and the 
 
 Decorators. ``kernel`` marks an integrator's entry kernel, the one compiled function Python calls
 per segment; ``jit`` a compiled helper that Python also calls (tests do); ``inner`` a compiled
-helper called only from compiled code. All cache their machine code on disk (massprops.dynamics
-points numba's cache at a folder keyed by a hash of the package's sources). ``inner`` helpers
-get no CPython wrapper: the wrapper (argument unboxing for every argument type) is a large part
-of a small function's compile time and is never used for them; a first ``simulate`` compiles
-~25% less code.
+helper called only from compiled code. All cache their machine code on disk, in a folder keyed by a
+hash of the package's sources (`massprops.dynamics.compiled.cache`; numba's settings and the
+environment untouched). ``inner`` helpers get no CPython wrapper: the wrapper (argument unboxing
+for every argument type) is a large part of a small function's compile time and is never used for
+them; a first ``simulate`` compiles ~25% less code.
 
 Plain Python compiled where called. The right-hand side (``forces.rhs``, ``forces.force_torque``,
 ``forces.quat_matrix``) and the closed-form free rigid body (every function marked
@@ -29,17 +29,20 @@ import sys
 from numba import njit
 from numba.extending import overload, register_jitable
 
-from massprops.dynamics import MANAGED_CACHE, _elementwise, elliptic, exact, forces  # noqa: F401
-from massprops.dynamics.compiled.prebuilt import seed
+from massprops.dynamics import _elementwise, elliptic, exact, forces  # noqa: F401
+from massprops.dynamics.compiled.cache import cached
 
-if MANAGED_CACHE is not None:  # before any kernel looks for its cached code
-    seed(MANAGED_CACHE)
 
-jit = njit(cache=True)
+def _cached_njit(**options):
+    """A decorator: numba's njit with massprops' kernel cache (compiled.cache says where)."""
+    return lambda fn: cached(njit(cache=False, **options)(fn))
+
+
+jit = _cached_njit()
 """Decorator: a compiled helper that Python may also call (uses only floats, ints, tuples,
 float64 arrays, numpy scalars functions and the math module)."""
 
-inner = njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+inner = _cached_njit(no_cpython_wrapper=True, no_cfunc_wrapper=True)
 """Decorator: a compiled helper called only from compiled code (calling it from Python raises)."""
 
 inlined = njit(inline="always")
@@ -48,7 +51,7 @@ few). Every separately compiled function that calls a large one (the right-hand 
 rotation) makes LLVM optimise that large one once more, when it is linked in; a caller that is
 inlined instead costs only its own body's typing."""
 
-kernel = njit(cache=True, nogil=True)
+kernel = _cached_njit(nogil=True)
 """Decorator of an integrator's entry kernel, the one compiled function Python calls per segment.
 It releases the GIL while it runs, so that simulate's error-estimate companion run steps on a
 second core at the same time as the main run (the functions it calls need no flag: the GIL is

@@ -13,9 +13,7 @@ Validity is numba's, not ours: numba uses a cached entry only when its index mat
 version, the source file's content hash, the function's bytecode and this CPU (target triple,
 CPU name and features). A wheel built on another machine or with another numba leaves entries
 numba does not use, and the first run compiles as it would have (with its notice). The manifest
-only avoids copying files numba would ignore.
-
-    python -m massprops.dynamics.compiled.prebuilt [--only rk4,dop853]  # fills this package's
+only avoids copying files numba would ignore. Building them: `massprops.dynamics.compiled.build`.
 """
 
 from __future__ import annotations
@@ -24,9 +22,7 @@ import contextlib
 import json
 import os
 import shutil
-import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[2]
@@ -53,43 +49,6 @@ def _cache_subpath(folder: Path) -> str:
     from numba.core.caching import _CacheLocator
 
     return _CacheLocator.get_suitable_cache_subpath(str(folder / "__init__.py"))
-
-
-def build(names: list[str] | None = None, jobs: int = 2) -> int:
-    """Compile the kernels of the integrators ``names`` (default: every stepping one) of the
-    package this module is in and store them in `FOLDER`; returns the number of files.
-    ``jobs`` processes compile side by side (one kernel is one process's work)."""
-    from massprops.dynamics.compiled import compiling
-    from massprops.dynamics.integrators import INTEGRATORS
-
-    kernels = compiling.compiled_names(names or list(INTEGRATORS))
-    scratch = Path(tempfile.mkdtemp(prefix="massprops-prebuild-"))
-    try:
-        shares = [kernels[i::jobs] for i in range(jobs)]
-        env = dict(os.environ, NUMBA_CACHE_DIR=str(scratch),
-                   PYTHONPATH=os.pathsep.join([str(PACKAGE.parent),
-                                               os.environ.get("PYTHONPATH", "")]))
-        code = ("import sys; from massprops.dynamics.compiled.compiling import helper_main; "
-                "helper_main(sys.argv[1:])")
-        procs = [subprocess.Popen([sys.executable, "-c", code, *share], env=env, cwd=PACKAGE.parent)
-                 for share in shares if share]
-        if any(p.wait() != 0 for p in procs):
-            raise RuntimeError("compiling a kernel failed")
-        shutil.rmtree(FOLDER, ignore_errors=True)
-        folders = {_cache_subpath(d): d.relative_to(PACKAGE).as_posix()
-                   for d in {p.parent for p in PACKAGE.rglob("*.py")}}
-        count, stored = 0, []
-        for cached in scratch.iterdir():
-            rel = folders.get(cached.name)
-            if rel is None:  # compiled code of a file outside the package: not ours to ship
-                continue
-            shutil.copytree(cached, FOLDER / rel)
-            stored.append(rel)
-            count += sum(1 for _ in cached.iterdir())
-        (FOLDER / MANIFEST).write_text(json.dumps(made_with() | {"folders": sorted(stored)}))
-        return count
-    finally:
-        shutil.rmtree(scratch, ignore_errors=True)
 
 
 def seed(cache: Path) -> int:
@@ -129,16 +88,3 @@ def _copy_missing(source: Path, target: Path) -> int:
         os.replace(partial, final)
         count += 1
     return count
-
-
-def main(argv: list[str]) -> None:
-    names = None
-    if argv[:1] == ["--only"] and len(argv) == 2:
-        names = argv[1].split(",")
-    elif argv:
-        sys.exit("usage: python -m massprops.dynamics.compiled.prebuilt [--only rk4,dop853]")
-    print(f"massprops: prebuilt {build(names)} kernel cache files into {FOLDER}")
-
-
-if __name__ == "__main__":
-    main(sys.argv[1:])

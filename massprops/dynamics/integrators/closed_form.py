@@ -27,6 +27,7 @@ def run_segment(y, t0, t1, setting, program_arrays, rot_only, t_out, y_out, stat
     inertia = program_arrays[4]
     codes, params = program_arrays[1], program_arrays[2]
     if codes.size and codes[-1] == JOINT and params[-1, 1] != 0.0:  # a heavy symmetric top
+        # deferred: only a heavy symmetric top needs the Lagrange top's closed form
         from massprops.dynamics.joints.lagrange import run_segment as lagrange_segment
 
         return lagrange_segment(y, t0, t1, program_arrays, t_out, y_out)

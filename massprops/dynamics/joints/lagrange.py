@@ -347,6 +347,7 @@ def run_segment(y, t0, t1, program_arrays, t_out, y_out) -> tuple[float, float]:
     """`exact`'s run_segment for a heavy symmetric top's pinned program (rotation-only layout
     [q_E, ω'_E]; the program's FORCE_WORLD rows are the weight at the centre of mass, its
     JOINT row last). Fills y_out, moves y to t1; err 0 (no truncation)."""
+    # deferred: keeps the closed form's import light (the exact path is numba-free)
     from massprops.dynamics.forces import FORCE_WORLD
 
     active, codes, params, _, inertia = program_arrays[:5]

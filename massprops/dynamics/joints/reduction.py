@@ -25,7 +25,8 @@ import weakref
 import numpy as np
 
 from massprops.dynamics.exact import SYMMETRY_RTOL
-from massprops.dynamics.forces import JOINT, NPAR, ForceProgram, compile_forces
+from massprops.dynamics.forces import JOINT, NPAR, ForceProgram, compile_free_forces
+from massprops.dynamics.joints.edges import held_diagnostics, held_trajectory
 from massprops.dynamics.joints.hold import Hold, hold_of
 from massprops.dynamics.joints.scene import bind_scene
 from massprops.dynamics.model import (
@@ -75,14 +76,10 @@ class JointModel:
 
     def to_world(self, t: np.ndarray, y: np.ndarray, with_energy: bool):
         """The pinned body's states (n, 13) as the held body's Trajectory, reactions included."""
-        from massprops.dynamics.joints.edges import held_trajectory
-
         return held_trajectory(self, t, y, with_energy)
 
     def diagnostics(self, y: np.ndarray, traj) -> dict:
         """constraint_drift and the conserved momenta's drifts (see edges.held_diagnostics)."""
-        from massprops.dynamics.joints.edges import held_diagnostics
-
         return held_diagnostics(self, y, traj)
 
 
@@ -131,12 +128,12 @@ def _build(scene: Scene) -> JointModel:
     physical_scene = dataclasses.replace(scene, forces=scene.forces + _joint_terms(hold),
                                          joints=())
     pinned_scene = _pinned_scene(scene, hold, pinned)
-    program = compile_forces(pinned_scene)
+    program = compile_free_forces(pinned_scene)
     closed = _is_lagrange_top(scene, hold, moments, lever)
     y0 = _initial_state(scene, hold, pinned)
     return JointModel(
         scene=scene, hold=hold, pinned=pinned, inertia_point=inertia_point, lever=lever,
-        physical=compile_forces(physical_scene),
+        physical=compile_free_forces(physical_scene),
         free_scene=dataclasses.replace(scene, joints=()),
         base=program, closed_form=closed,
         conserved=_conserved(scene, hold, moments, lever, program), y0=y0)

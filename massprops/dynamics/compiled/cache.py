@@ -1,0 +1,154 @@
+"""Where massprops' own kernels keep their machine code, without touching the host process.
+
+numba checks a cached kernel only against its own source file, so a kernel that calls a changed
+function in another file (``forces.rhs``) would keep running stale machine code after an edit or
+an upgrade. massprops' kernels therefore cache in a folder keyed by a hash of the dynamics
+package's sources, ``$XDG_CACHE_HOME/massprops/numba-<hash>/`` (``~/.cache`` by default), or
+under the NUMBA_CACHE_DIR the user set, by numba's own rule. Only massprops' kernels use it:
+their decorators (`jit`) give each one a `KernelCache`, whose locator knows that folder. numba's
+config and the environment are never changed, so a user's own numba functions cache where numba
+puts them.
+
+Nothing is written on import. The first time a kernel is loaded or compiled, `cache_root` makes
+the folder (a per-user temporary one if the home cannot be written), marks it as used, removes
+folders of other sources unused for `UNUSED_CACHE_DAYS`, and copies in the kernels shipped with
+the package (`prebuilt.seed`).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import shutil
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+from numba.core import config
+from numba.core.caching import (
+    CompileResultCacheImpl,
+    FunctionCache,
+    IndexDataCacheFile,
+    _CacheLocator,
+    _SourceFileBackedLocatorMixin,
+)
+
+from massprops.dynamics.compiled.prebuilt import seed
+
+DYNAMICS = Path(__file__).resolve().parents[1]
+"""The sources whose hash names the folder (every kernel and what it calls lives here)."""
+
+UNUSED_CACHE_DAYS = 30
+"""A cache folder of other sources (an older version, another checkout) not used for this many
+days is removed when a new one is made: each holds ~8 MB, and every upgrade makes one."""
+
+
+@functools.cache
+def _digest() -> str:
+    digest = hashlib.sha256(sys.version.encode())
+    for path in sorted(DYNAMICS.rglob("*.py")):
+        digest.update(path.relative_to(DYNAMICS).as_posix().encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def planned_root() -> Path:
+    """The folder the kernels will cache in (nothing is created): the user's NUMBA_CACHE_DIR as
+    numba reads it, else massprops' own folder for these sources."""
+    if config.CACHE_DIR:
+        return Path(config.CACHE_DIR)
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "massprops" / f"numba-{_digest()}"
+
+
+_settle_lock = threading.Lock()
+
+
+@functools.cache
+def cache_root() -> Path:
+    """The folder, made ready for use (see the module doc); called on the first load or compile.
+    A NUMBA_CACHE_DIR the user chose is used as it is: not seeded, not pruned."""
+    with _settle_lock:
+        target = planned_root()
+        if config.CACHE_DIR:
+            return target
+        try:
+            fresh = not target.is_dir()
+            target.mkdir(parents=True, exist_ok=True)
+            os.utime(target)  # "last used", for the pruning below (numba only reads a warm cache)
+            if fresh:
+                _prune_unused(target.parent, keep=target)
+        except OSError:  # read-only home: a per-user temporary folder still caches within a boot
+            target = Path(tempfile.gettempdir()) / f"massprops-numba-{_digest()}"
+            target.mkdir(parents=True, exist_ok=True)
+        seed(target)
+        return target
+
+
+def _prune_unused(parent: Path, keep: Path) -> None:
+    cutoff = time.time() - UNUSED_CACHE_DAYS * 86400
+    for old in parent.glob("numba-*"):
+        if old != keep and old.is_dir() and old.stat().st_mtime < cutoff:
+            shutil.rmtree(old, ignore_errors=True)
+
+
+class _KernelLocator(_SourceFileBackedLocatorMixin, _CacheLocator):
+    """numba's locator protocol for massprops' kernels: the source file's stamp as numba's own
+    locators take it, the folder under `planned_root` until `cache_root` settles it."""
+
+    def __init__(self, py_func, py_file):
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        self._subpath = self.get_suitable_cache_subpath(py_file)
+        self._cache_path = str(planned_root() / self._subpath)
+
+    def get_cache_path(self):
+        return self._cache_path
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        return cls(py_func, py_file)  # numba's own would make the folder now: on import
+
+
+class _KernelCacheImpl(CompileResultCacheImpl):
+    _locator_classes = [_KernelLocator]
+
+
+class KernelCache(FunctionCache):
+    """numba's per-function cache, in massprops' folder, settled on first use."""
+
+    _impl_class = _KernelCacheImpl
+
+    def __init__(self, py_func):
+        super().__init__(py_func)
+        self._settled = False
+
+    def _settle(self) -> None:
+        if self._settled:
+            return
+        locator = self._impl.locator
+        path = str(cache_root() / locator._subpath)
+        if path != self._cache_path:  # the home was read-only: the temporary folder
+            locator._cache_path = self._cache_path = path
+            self._cache_file = IndexDataCacheFile(cache_path=path,
+                                                  filename_base=self._impl.filename_base,
+                                                  source_stamp=locator.get_source_stamp())
+        self._settled = True
+
+    def load_overload(self, sig, target_context):
+        self._settle()
+        return super().load_overload(sig, target_context)
+
+    def save_overload(self, sig, data):
+        self._settle()
+        return super().save_overload(sig, data)
+
+
+def cached(dispatcher):
+    """Give a numba dispatcher (made with ``cache=False``) massprops' kernel cache: what numba's
+    ``cache=True`` does, ``dispatcher._cache = FunctionCache(py_func)``, with our locator."""
+    dispatcher._cache = KernelCache(dispatcher.py_func)
+    return dispatcher
