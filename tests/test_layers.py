@@ -174,3 +174,15 @@ def _part_of_imports(line: str) -> bool:
     text = line.strip()
     return (not text or text.startswith(("from ", "import ")) or text == ")"
             or (text.endswith(",") and text.replace(",", "").replace(" as ", "").isidentifier()))
+
+
+@pytest.mark.parametrize("name", sorted(MODULES))
+def test_numba_only_where_kernels_are_made(name):
+    """numba's decorators and cache live in dynamics.compiled; a kernel module takes them from
+    there (a bare ``njit(cache=True)`` would cache outside massprops' folder)."""
+    if name.startswith("massprops.dynamics.compiled"):
+        return
+    for target, line, deferred in GRAPH[name]:
+        assert target.partition(".")[0] != "numba", (
+            f"{MODULES[name]}:{line}: numba imported outside massprops.dynamics.compiled; take "
+            f"the decorators from massprops.dynamics.compiled.jit")

@@ -51,6 +51,10 @@ few). Every separately compiled function that calls a large one (the right-hand 
 rotation) makes LLVM optimise that large one once more, when it is linked in; a caller that is
 inlined instead costs only its own body's typing."""
 
+inlined_jit = _cached_njit(inline="always")
+"""Decorator: inlined into its compiled callers like `inlined`, and callable from Python too (its
+own compiled form cached like `jit`'s)."""
+
 kernel = _cached_njit(nogil=True)
 """Decorator of an integrator's entry kernel, the one compiled function Python calls per segment.
 It releases the GIL while it runs, so that simulate's error-estimate companion run steps on a
@@ -108,5 +112,5 @@ def start_numba_lean() -> None:
                 del sys.modules[name]
 
 
-__all__ = ["COMPILED_OPTIONS", "LEAN_SKIPPED", "inlined", "inner", "jit", "kernel",
+__all__ = ["COMPILED_OPTIONS", "LEAN_SKIPPED", "inlined", "inlined_jit", "inner", "jit", "kernel",
            "start_numba_lean"]

@@ -15,9 +15,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from massprops.dynamics.compiled.jit import inner, jit
+from massprops.dynamics.compiled.jit import inlined_jit, inner, jit
 from massprops.dynamics.exact import free_rotation_kernel
 from massprops.dynamics.forces import DRAG, JOINT, SPRING
 from massprops.dynamics.integrators._newton import lu_factor, lu_solve
@@ -95,7 +94,7 @@ def z_mass(i, mass, inertia, o):
 
 
 # --- the kick ----------------------------------------------------------------------------------
-@njit(cache=True, inline="always")
+@inlined_jit
 def kick(y, tau_a, tau_b, kp, wk):
     """Two consecutive kicks of lengths tau_a then tau_b (s, either sign) at the configuration of
     y, applied to y in place; returns the number of ``force_torque`` evaluations.
@@ -114,7 +113,7 @@ def kick(y, tau_a, tau_b, kp, wk):
     return 0
 
 
-@njit(cache=True, inline="always")
+@inlined_jit
 def exact_kick(y, tau, codes, active_c, params_c, mass, inertia, o):
     """z += tau M⁻¹ F_c(r, q): the exact flow of the configuration-dependent forces."""
     f6 = ft(y, o, active_c, codes, params_c)
@@ -200,7 +199,7 @@ def drift_work():
     return np.empty(4), np.empty(3), np.empty(1), np.empty((1, 4)), np.empty((1, 3))
 
 
-@njit(cache=True, inline="always")
+@inlined_jit
 def drift(y, tau, inertia, dw):
     """The torque-free, force-free flow over tau (s, either sign), in place: r += tau v (full
     layout) and (q, ω') the exact free rigid body (`exact.free_rotation_kernel`; inertia (3,)
