@@ -36,7 +36,8 @@ def _files(folder) -> list[str]:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("own_cache", [False, True], ids=["no NUMBA_CACHE_DIR", "own NUMBA_CACHE_DIR"])
+@pytest.mark.parametrize("own_cache", [False, True],
+                         ids=["no NUMBA_CACHE_DIR", "own NUMBA_CACHE_DIR"])
 def test_importing_every_module_changes_nothing(tmp_path, own_cache):
     home, work = tmp_path / "home", tmp_path / "work"
     home.mkdir()
@@ -72,5 +73,5 @@ def test_a_kernel_used_caches_in_massprops_folder_and_nowhere_else(tmp_path):
     assert out.returncode == 0, out.stderr
     root, config_dir, env_set = out.stdout.split()
     assert config_dir == "''" and env_set == "False"
-    cached = [p for p in (home / ".cache" / "massprops").rglob("*.nbi")]
+    cached = list((home / ".cache" / "massprops").rglob("*.nbi"))
     assert cached and all(str(p).startswith(root) for p in cached)

@@ -182,7 +182,7 @@ def test_numba_only_where_kernels_are_made(name):
     there (a bare ``njit(cache=True)`` would cache outside massprops' folder)."""
     if name.startswith("massprops.dynamics.compiled"):
         return
-    for target, line, deferred in GRAPH[name]:
+    for target, line, _ in GRAPH[name]:
         assert target.partition(".")[0] != "numba", (
             f"{MODULES[name]}:{line}: numba imported outside massprops.dynamics.compiled; take "
             f"the decorators from massprops.dynamics.compiled.jit")
