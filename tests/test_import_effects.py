@@ -67,7 +67,8 @@ def test_a_kernel_used_caches_in_massprops_folder_and_nowhere_else(tmp_path):
             "from massprops.dynamics.compiled.cache import planned_root\n"
             "from massprops.dynamics.compiled.compiling import warm_up\n"
             "warm_up('rk4')\n"
-            "print(planned_root(), repr(numba.config.CACHE_DIR), 'NUMBA_CACHE_DIR' in os.environ)\n")
+            "print(planned_root(), repr(numba.config.CACHE_DIR),\n"
+            "      'NUMBA_CACHE_DIR' in os.environ)\n")
     out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env,
                          capture_output=True, text=True, timeout=240)
     assert out.returncode == 0, out.stderr
