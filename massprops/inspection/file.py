@@ -43,6 +43,20 @@ class Inspection:
     def warnings(self) -> tuple[str, ...]:
         return tuple(self.health.warnings)
 
+    # the numbers, read straight off the result (units and frames: `MassProperties`)
+    volume = property(lambda self: self.properties.volume, doc="m³")
+    mass = property(lambda self: self.properties.mass, doc="kg")
+    density = property(lambda self: self.properties.density, doc="kg/m³")
+    center_of_mass = property(lambda self: self.properties.center_of_mass, doc="(3,) m, mesh frame")
+    inertia = property(lambda self: self.properties.inertia,
+                       doc="(3, 3) kg·m², about the centre of mass, mesh axes")
+    principal_moments = property(lambda self: self.properties.principal_moments,
+                                 doc="(3,) kg·m², ascending")
+    principal_axes = property(lambda self: self.properties.principal_axes,
+                              doc="(3, 3): columns, a proper rotation, J = R diag(moments) Rᵀ")
+    uncertainty = property(lambda self: self.properties.uncertainty,
+                           doc="the error bars (rounding, input, repair)")
+
     def repairs_as_dict(self) -> dict | None:
         """The contract's ``repairs`` object: the health check's weld of round-off cracks and
         the repairs asked for, each by its name; None when nothing was repaired."""
