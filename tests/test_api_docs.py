@@ -37,7 +37,8 @@ def test_every_public_name_resolves(name):
 
 
 def test_import_massprops_loads_nothing_else():
-    code = "import sys, massprops; print(sorted(m for m in sys.modules if m.split('.')[0] == 'massprops'))"
+    code = ("import sys, massprops\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'massprops'))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=dict(os.environ, PYTHONPATH=str(ROOT)), timeout=60, check=True)
     assert out.stdout.strip() == "['massprops']"
