@@ -7,9 +7,48 @@ reader. Subclasses also inherit the builtin a Python caller would expect (``OSEr
 
 from __future__ import annotations
 
+import re
+from collections.abc import Callable
+
+_SETTING = re.compile("\x1f([a-z_.]+)\x1f")
+
+
+def setting_ref(name: str) -> str:
+    """A reference to one of the caller's settings inside a message: ``name`` is the library's
+    keyword (``fill_holes``, ``allow_open``, ``rtol``). The message carries the name as data and
+    whoever shows it says it in its own terms (`render_settings`): the CLI as its flag
+    (``--fill-holes``), a scene as its key (``fill_holes: true``), the library as the keyword."""
+    return f"\x1f{name}\x1f"  # a control character: never part of a file name or a number
+
+
+def settings_in(text: str) -> tuple[str, ...]:
+    """The settings a message refers to, in order (see `setting_ref`)."""
+    return tuple(_SETTING.findall(text))
+
+
+def render_settings(text: str, say: Callable[[str], str] = str) -> str:
+    """``text`` with each `setting_ref` reference said by ``say(name)`` (default: the name)."""
+    return _SETTING.sub(lambda m: say(m[1]), text)
+
 
 class MassPropsError(Exception):
-    """Root of every error massprops raises on purpose."""
+    """Root of every error massprops raises on purpose. Its message may refer to the caller's
+    settings (`setting_ref`): ``settings`` names them, ``render`` says them in the caller's terms,
+    ``str()`` as the library's keywords."""
+
+    @property
+    def template(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+    @property
+    def settings(self) -> tuple[str, ...]:
+        return settings_in(self.template)
+
+    def render(self, say: Callable[[str], str] = str) -> str:
+        return render_settings(self.template, say)
+
+    def __str__(self) -> str:
+        return self.render()
 
 
 # --- exit 1: an input could not be processed -----------------------------------------------------
@@ -116,12 +155,14 @@ def exit_code(exc: BaseException) -> int:
 
 
 def error_message(exc: BaseException) -> str:
-    """The one line that reports ``exc`` (the CLI prefixes it with ``massprops: error: ``).
+    """The one line that reports ``exc`` (the CLI prefixes it with ``massprops: error: ``), its
+    `setting_ref` references kept for the caller to say in its terms (`render_settings`).
 
     Our own errors already name the file and the fix; an OSError names its file and reason; any
     other exception is a bug, said as such without a traceback."""
     if isinstance(exc, MassPropsError):
-        return str(exc)
+        return exc.template
     if isinstance(exc, OSError):
         return f"{exc.filename or ''}: {exc.strerror or exc}".lstrip(": ")
-    return f"internal error: {type(exc).__name__}: {exc} (run with --debug for details)"
+    return (f"internal error: {type(exc).__name__}: {exc} (run with {setting_ref('debug')} "
+            f"for details)")

@@ -165,3 +165,11 @@ def exact_mass_properties(vertices, faces):
     trace = sum(central[p][p] for p in range(3))
     inertia = [[(trace if p == q else 0) - central[p][q] for q in range(3)] for p in range(3)]
     return volume, com, inertia
+
+
+def said_by_cli(message) -> str:
+    """A library error (or its message) as the command line says it: the settings it names
+    (`massprops.errors.setting_ref`) as options."""
+    from massprops.cli.common import cli_text
+
+    return cli_text(getattr(message, "template", message))

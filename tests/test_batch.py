@@ -20,7 +20,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 import numpy as np
 import pytest
 from _batchdata import binary_stl_box, descendants, mixed_batch, torus_obj
-from conftest import box_vf
+from conftest import box_vf, said_by_cli
 
 from massprops.batch import BadInput, expand_inputs, inspect_many, mesh_extensions, plan
 from massprops.batch.table import CSV_COLUMNS, csv_header, csv_row
@@ -70,7 +70,7 @@ def test_directory_without_meshes_is_one_bad_input(tmp_path):
     (tmp_path / "readme.txt").write_text("x")
     (bad,) = expand_inputs([str(tmp_path)])
     assert isinstance(bad, BadInput) and bad.name == str(tmp_path)
-    assert exit_code(bad.error) == 1 and "--recursive" in str(bad.error)
+    assert exit_code(bad.error) == 1 and "recursive" in bad.error.settings
 
 
 def test_globs_expand_sorted_and_an_unmatched_pattern_stays_a_path(tmp_path):
@@ -210,7 +210,7 @@ def test_a_lost_task_is_split_then_retried_alone_and_every_file_reported_once(tm
             assert g == w
     if failures >= 3:  # split, failed as a single file, then alone: given up, exit 3
         assert got[4][3] == 3 and got[4][0] is None
-        assert victim in got[4][2] and "--jobs 1" in got[4][2]
+        assert victim in got[4][2] and "--jobs 1" in said_by_cli(got[4][2])
     if failures >= 2:  # its run as a suspect had nothing else in flight
         assert executor.company[-1] == 0
 

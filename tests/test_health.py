@@ -8,6 +8,7 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from conftest import said_by_cli
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -217,7 +218,9 @@ def test_open_cube_is_refused_with_the_gap_counted():
     mesh = from_polygons(corners(), CUBE_QUADS[1:], "open.obj")
     with pytest.raises(MeshTopologyError) as err:
         prepare_mesh(mesh)
-    assert str(err.value) == ("open.obj: mesh is not closed: 4 boundary edges (total length 4 m "
+    assert err.value.settings == ("fill_holes", "allow_open")
+    assert said_by_cli(err.value) == (
+        "open.obj: mesh is not closed: 4 boundary edges (total length 4 m "
                               "in 1 boundary loop, the largest of 4 edges spanning 1 m² (20% of "
                               "the surface area)); use --fill-holes to cap them, or --allow-open "
                               "to compute anyway")

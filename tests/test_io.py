@@ -474,7 +474,7 @@ def test_text_stream_is_accepted():
 
 
 def test_stream_without_format_is_a_usage_error():
-    with pytest.raises(UsageError, match="input-format"):
+    with pytest.raises(UsageError, match="input_format"):
         read_mesh(io.BytesIO(TETRA_VF.encode()))
 
 

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import said_by_cli
 from exact_moments import box as exact_box
 from exact_moments import mesh as exact_mesh
 from exact_moments import prism
@@ -114,7 +115,7 @@ def test_opening_is_refused_naming_its_length_and_area():
     surface = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]),
                              axis=1).sum() / 2
     length, cap = 64 * math.sin(math.pi / 32), 16 * math.sin(math.pi / 16)
-    assert str(err.value) == (
+    assert said_by_cli(err.value) == (
         f"bowl: boundary loop 1 of 1 (32 edges, length {length:.6g} m) would need a cap of "
         f"{cap:.6g} m², {100 * cap / surface:.3g}% of the surface area: too large to be a hole "
         f"(limit 0.1 of the surface; raise it with --max-hole, or use --shell for a thin-walled "
@@ -149,7 +150,7 @@ def test_scanned_like_sphere_with_holes_against_its_intact_self():
         patch = [seed] + list(np.flatnonzero(np.isin(s.faces, s.faces[seed]).sum(axis=1) == 2))
         removed.update(patch[: 1 + rng.integers(0, 6)])
     holed = without(intact, sorted(removed))
-    with pytest.raises(MeshTopologyError, match="use --fill-holes to cap them"):
+    with pytest.raises(MeshTopologyError, match="use fill_holes to cap them"):
         inspect_mesh(holed)
     result = inspect_mesh(holed, repairs=FILL)
     p = result.properties

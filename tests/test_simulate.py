@@ -305,7 +305,7 @@ def test_cache_folders_unused_for_a_month_are_pruned(tmp_path):
     import os
     import time
 
-    import massprops.dynamics as dyn
+    import massprops.dynamics.compiled.cache as dyn
 
     old = time.time() - (dyn.UNUSED_CACHE_DAYS + 1) * 86400
     for name in ("numba-stale", "numba-recent", "numba-current", "unrelated"):

@@ -27,7 +27,7 @@ from collections.abc import Iterable, Iterator
 from functools import lru_cache
 from typing import BinaryIO, NamedTuple
 
-from massprops.errors import MeshFileError
+from massprops.errors import MeshFileError, setting_ref
 
 _GLOB_CHARS = frozenset("*?[")
 _LIST_BLOCK = 1 << 16
@@ -109,7 +109,8 @@ def _directory(top: str, recursive: bool) -> Iterator[str | BadInput]:
         known = ", ".join(sorted(mesh_extensions()))
         yield BadInput(top, MeshFileError(
             f"{top}: no mesh files in this directory{' or below' if recursive else ''} "
-            f"(extensions read: {known})" + ("" if recursive else "; --recursive descends")))
+            f"(extensions read: {known})"
+            + ("" if recursive else f"; {setting_ref('recursive')} descends")))
 
 
 def _walk(folder: str, recursive: bool) -> Iterator[str | BadInput]:

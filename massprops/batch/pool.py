@@ -6,7 +6,7 @@ import contextlib
 import os
 from typing import TYPE_CHECKING, Any
 
-from massprops.errors import UsageError
+from massprops.errors import UsageError, setting_ref
 
 if TYPE_CHECKING:  # concurrent.futures (and logging) load only when a pool is used
     from concurrent.futures import Executor, ProcessPoolExecutor
@@ -82,7 +82,8 @@ def dask_executor(address: str, *, timeout: float = 10.0) -> tuple[Executor, int
         from distributed import Client
     except ImportError as exc:
         raise UsageError(
-            "--scheduler needs dask.distributed, which is not installed; install it with: "
+            f"{setting_ref('scheduler')} needs dask.distributed, which is not installed; install "
+            "it with: "
             "pip install 'massprops[dask]'") from exc
     try:
         client = Client(address, timeout=timeout, set_as_default=False)

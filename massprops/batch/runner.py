@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 from massprops.batch import plan
 from massprops.batch.inputs import BadInput
 from massprops.batch.records import MeshResult, inspect_one
-from massprops.errors import ComputationError, UsageError
+from massprops.errors import ComputationError, UsageError, setting_ref
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor, Future
@@ -92,7 +92,7 @@ def inspect_many(paths: Iterable, executor: Executor | None = None, *, jobs: int
     ``close``) when stopping before the end.
     """
     if jobs is not None and jobs < 1:
-        raise UsageError(f"--jobs must be at least 1, got {jobs}")
+        raise UsageError(f"{setting_ref('jobs')} must be at least 1, got {jobs}")
     return Batch(paths, executor, jobs, options, workers, chunk_s)
 
 
@@ -356,7 +356,7 @@ class Batch(Iterator[MeshResult]):
         path = slot.chunk.inputs[0]
         lost = ComputationError(
             f"{path}: the worker inspecting it stopped ({type(error).__name__}: {error}); "
-            f"inspect it alone (--jobs 1) to see why")
+            f"inspect it alone ({setting_ref('jobs')} 1) to see why")
         slot.results = [MeshResult.failed(path, lost)]
 
     def _run_alone(self, slot: _Slot) -> None:

@@ -10,7 +10,7 @@ import click
 
 from massprops import __version__
 from massprops.cli.common import say_error
-from massprops.errors import UsageError
+from massprops.errors import UsageError, error_message
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -37,7 +37,7 @@ def main(argv: list[str] | None = None) -> None:
         click.echo("massprops: interrupted", err=True)
         sys.exit(130)
     except UsageError as exc:
-        say_error(str(exc))
+        say_error(error_message(exc))
         sys.exit(2)
     # The process ends here: freeze what the command left (after simulate, numba's ~10^6
     # typing and compiled-code objects) so the interpreter's teardown does not collect them one

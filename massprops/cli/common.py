@@ -5,12 +5,13 @@ keyword arguments)."""
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable
 from typing import Any
 
 import click
 
-from massprops.errors import error_message, exit_code
+from massprops.errors import error_message, exit_code, render_settings
 
 UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")
 """The keys of massprops.io.UNITS, written out so that building the CLI does not import the
@@ -27,12 +28,26 @@ INSPECT_FORMATS = ("table", "json", "csv", *ELEMENT_FORMATS)
 robot formats' <inertial> elements."""
 
 
+def flag(name: str) -> str:
+    """A setting a library message refers to (`massprops.errors.setting_ref`), as the command
+    line says it: an option ``--max-hole``; a scene key with the option that overrides it,
+    ``time.rtol (or --rtol)``."""
+    if "." in name:
+        return f"{name} (or --{name.rpartition('.')[2].replace('_', '-')})"
+    return "--" + name.replace("_", "-")
+
+
+def cli_text(text: str) -> str:
+    """A library message with the settings it names said as options (see `flag`)."""
+    return render_settings(text, flag)
+
+
 def say_error(message: str) -> None:
-    click.echo(f"massprops: error: {message}", err=True)
+    click.echo(f"massprops: error: {cli_text(message)}", err=True)
 
 
 def say_warning(name: str, message: str) -> None:
-    click.echo(f"massprops: warning: {name}: {message}", err=True)
+    click.echo(f"massprops: warning: {name}: {cli_text(message)}", err=True)
 
 
 def say_note(message: str) -> None:
@@ -60,7 +75,10 @@ def guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
 
 def emit_json(obj: dict) -> None:
     # allow_nan=False: a NaN reaching the output is a bug to surface, never a number to print
-    click.echo(json.dumps(obj, allow_nan=False))
+    text = json.dumps(obj, allow_nan=False)
+    if "\\u001f" in text:  # a message of the library's naming a setting (see `flag`)
+        text = re.sub(r"\\u001f([a-z_.]+)\\u001f", lambda m: flag(m[1]), text)
+    click.echo(text)
 
 
 def positive(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:

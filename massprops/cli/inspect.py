@@ -14,6 +14,7 @@ from massprops.cli.app import cli
 from massprops.cli.common import (
     ELEMENT_FORMATS,
     INSPECT_FORMATS,
+    cli_text,
     emit_json,
     guarded,
     inspect_kwargs,
@@ -21,7 +22,7 @@ from massprops.cli.common import (
     say_error,
     say_warning,
 )
-from massprops.errors import UsageError, exit_code
+from massprops.errors import UsageError, error_message, exit_code
 
 
 @cli.command()
@@ -92,7 +93,7 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
         try:
             executor, workers, client = dask_executor(scheduler)
         except UsageError as exc:  # not installed, or not reachable
-            say_error(str(exc))
+            say_error(error_message(exc))
             ctx.exit(exit_code(exc))
     try:
         batch = inspect_many(inputs, executor, jobs=jobs, workers=workers, **options)
@@ -279,7 +280,8 @@ def _silence_stdout() -> None:
 
 def _echo_text(text: str) -> None:
     """Text to stdout as is; a file name that is not valid UTF-8 (decoded with surrogate
-    escapes) goes out as its original bytes."""
+    escapes) goes out as its original bytes. Settings the library names are said as options."""
+    text = cli_text(text)
     try:
         click.echo(text, nl=False)
     except UnicodeEncodeError:

@@ -17,6 +17,8 @@ from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
 
+from massprops.cli.common import cli_text
+
 # a pipe gets no colour (rich's own check) and a fixed width wide enough for the tables, rather
 # than wrapping at 80 columns where no one will resize a window
 _console = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
@@ -106,7 +108,7 @@ def inspection_renderable(data: dict, repaired: Iterable[str] | None = None) -> 
         parts += [Text(""), _repairs_table(shown)]
     if data["warnings"]:
         parts.append(Text(""))
-        parts.extend(Text(f"warning: {w}", style="yellow") for w in data["warnings"])
+        parts.extend(Text(f"warning: {cli_text(w)}", style="yellow") for w in data["warnings"])
     return Group(*parts, Text(""))
 
 
@@ -190,7 +192,7 @@ def print_precision(name: str, report) -> None:
         previous = r.integrator
         setting = f"{r.setting:.3g}" if r.setting_name != "none" else ""
         if r.reason is not None:
-            failed.append(f"{r.integrator} {setting}: {r.reason}")
+            failed.append(f"{r.integrator} {setting}: {cli_text(r.reason)}")
         _row(t, label, setting, "—" if r.wall_time_s is None else f"{r.wall_time_s:.2e}",
                   f"failed ({len(failed)})" if r.error is None else f"{r.error:.2e}",
                   "—" if r.estimate is None else f"{r.estimate:.2e}", str(r.steps),
@@ -214,7 +216,7 @@ def print_model(report, rtol: float | None = None) -> None:
     for r in report.links:
         if r.computed is None:
             _row(t, r.name, "", "", "", "", "", "", "", "skipped")
-            notes.append(f"{r.name}: {r.reason}")
+            notes.append(f"{r.name}: {cli_text(r.reason)}")
             continue
         c, cmp = r.computed, r.comparison
         if cmp is None:
@@ -226,7 +228,7 @@ def print_model(report, rtol: float | None = None) -> None:
                  f"{cmp.com_rel:.2%}", f"{cmp.inertia_rel:.2%}", angle,
                  "yes" if not cmp.problems else "NO", verdict)
             notes.extend(f"{r.name}: stated {p}" for p in cmp.problems)
-        notes.extend(f"{r.name}: {w}" for w in r.warnings)
+        notes.extend(f"{r.name}: {cli_text(w)}" for w in r.warnings)
     _console.print(t)
     for n in notes:
         _console.print(Text(n, style="yellow"))

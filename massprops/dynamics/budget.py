@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-from massprops.errors import RunBudgetError
+from massprops.errors import RunBudgetError, setting_ref
 
 MAX_STEPS = 20_000_000
 """Steps one run may take unless the caller says otherwise (``simulate(max_steps=)``, the CLI's
@@ -53,8 +53,8 @@ def check_samples(duration: float, every: float, source: str = "") -> int:
         raise RunBudgetError(
             f"{_where(source)}sampling every {every:.3g} s over {duration:.6g} s gives "
             f"{n:.3g} output samples, "
-            f"more than the run bound of {MAX_SAMPLES:.0e}; set output.every (or --every) to at "
-            f"least {duration / MAX_SAMPLES:.3g} s, or shorten time.duration")
+            f"more than the run bound of {MAX_SAMPLES:.0e}; set {setting_ref('output.every')} "
+            f"to at least {duration / MAX_SAMPLES:.3g} s, or shorten time.duration")
     return int(math.floor(n * (1 + 1e-12)))
 
 
@@ -68,7 +68,8 @@ def check_fixed_steps(name: str, duration: float, step: float, edges: int,
         raise RunBudgetError(
             f"{_where(source)}{name} at step {step:.3g} s over {duration:.6g} s would take "
             f"{steps:.3g} steps, "
-            f"more than the run bound of {limit:.3g} (--max-steps); set time.step (or --step) "
+            f"more than the run bound of {limit:.3g} ({setting_ref('max_steps')}); set "
+            f"{setting_ref('time.step')} "
             f"to at least {duration / limit:.3g} s, shorten time.duration, or use an adaptive "
             "or closed-form integrator (dop853, exact)")
 
@@ -78,11 +79,11 @@ def exhausted(steps: int, fraction_done: float, limit: int | None = None) -> str
     stop now (``limit``: default MAX_STEPS), or None to go on."""
     limit = limit or MAX_STEPS
     if steps >= limit:
-        return f"it has taken {steps:.3g} steps, the run bound (--max-steps)"
+        return f"it has taken {steps:.3g} steps, the run bound ({setting_ref('max_steps')})"
     if steps >= min(PROJECT_AFTER, limit // 10) and fraction_done > 0.0:
         projected = steps / fraction_done
         if projected > PROJECT_MARGIN * limit:
             return (f"at its pace so far ({steps:.3g} steps for {100 * fraction_done:.3g} % of "
                     f"the run) it would need ~{projected:.2g} steps, beyond the run bound of "
-                    f"{limit:.3g} (--max-steps)")
+                    f"{limit:.3g} ({setting_ref('max_steps')})")
     return None

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.errors import UsageError
+from massprops.errors import UsageError, setting_ref
 
 
 def require_matplotlib() -> None:
@@ -21,7 +21,8 @@ def _pyplot():
         matplotlib.use("Agg")  # files only; never needs a display
         import matplotlib.pyplot as plt
     except ImportError as exc:
-        raise UsageError("--plot needs matplotlib: pip install 'massprops[plot]'") from exc
+        raise UsageError(f"{setting_ref('plot')} needs matplotlib: pip install 'massprops[plot]'"
+                         ) from exc
     return plt
 
 

@@ -197,7 +197,7 @@ def _rung(scene, program, spec, setting, t_out, truth, scales) -> PrecisionRun:
         result = simulate(scene, integrator=spec.name, rtol=setting, step=setting, every=every)
     except MassPropsError as exc:  # diverged, out of budget, a setting the method refuses
         part = getattr(exc, "partial", None)
-        why = str(exc).removeprefix(f"{scene.source}: ")
+        why = exc.template.removeprefix(f"{scene.source}: ")  # settings said by the caller
         if part is None:
             return PrecisionRun(spec.name, setting, name, None, None, None, 0, 0, why)
         return PrecisionRun(spec.name, setting, name, part.wall_time_s, None, None, part.steps,

@@ -19,7 +19,7 @@ from massprops.dynamics.forces import ForceProgram
 from massprops.dynamics.integrators.base import STATUS_STEP_LIMIT
 from massprops.dynamics.model import Scene
 from massprops.dynamics.program import initial_principal_state
-from massprops.errors import ComputationError
+from massprops.errors import ComputationError, setting_ref
 
 CHUNK_STEPS = 50_000
 """Steps per compiled call (~0.05 s): between calls Ctrl-C and the progress bar are served.
@@ -50,6 +50,21 @@ def scale_floors(scene: Scene) -> np.ndarray:
     return np.array([size, size / duration, 1.0, 1.0 / duration])
 
 
+@dataclass(frozen=True)
+class Failure:
+    """Why a run ended short of its end: ``method`` ``verb`` ("diverged" or "stopped") at ``t``
+    (s) because ``what``; ``advice`` says what to change. ``str()`` is the sentence."""
+
+    method: str
+    verb: str
+    t: float
+    what: str
+    advice: str
+
+    def __str__(self) -> str:
+        return f"{self.method} {self.verb} at t = {self.t:.6g} s: {self.what}; {self.advice}"
+
+
 @dataclass(frozen=True, eq=False)
 class RawRun:
     """One integration in the principal frame: samples t (n,), y (n, 13) up to where it got
@@ -64,7 +79,7 @@ class RawRun:
     stats: np.ndarray
     wall: float
     warmup: float
-    failure: str | None
+    failure: Failure | None
     interrupted: bool
     short_err: float = 0.0
     exhausted: bool = False
@@ -89,9 +104,9 @@ def run_once(scene: Scene, program: ForceProgram, spec, setting: float, t_out: n
         first = int(np.argmax(bad))
         if first == 0:
             raise ComputationError(f"{spec.name}: the initial state is not finite: {y_kept[0]}")
-        failure = failure or (f"{spec.name} diverged at t = {t_kept[first]:.6g} s: the state "
-                              "became NaN, infinite or no rotation; "
-                              + stability_hint(program, setting, spec.name))
+        failure = failure or Failure(spec.name, "diverged", float(t_kept[first]),
+                                     "the state became NaN, infinite or no rotation",
+                                     stability_hint(program, setting, spec.name))
         t_kept, y_kept = t_kept[:first], y_kept[:first]
     return RawRun(t_kept, y_kept, runner.stats, runner.wall, runner.warmup, failure,
                   interrupted, runner.short_err, runner.exhausted)
@@ -123,8 +138,8 @@ def stability_hint(program: ForceProgram, setting: float, name: str) -> str:
 
 def budget_advice(spec, program: ForceProgram) -> str:
     """What to change when a run of ``spec`` needs more steps than the run bound."""
-    what = ("loosen time.rtol (or --rtol)" if spec.kind == "adaptive"
-            else "raise time.step (or --step)")
+    what = (f"loosen {setting_ref('time.rtol')}" if spec.kind == "adaptive"
+            else f"raise {setting_ref('time.step')}")
     advice = f"{what} or shorten time.duration"
     if program.stiffest_rate > 0 and not spec.stiff:
         advice += (f"; the stiffest term has rate {program.stiffest_rate:.3g}/s: integrator "
@@ -143,7 +158,7 @@ class _Runner:
         self.progress, self.duration = progress, duration
         self.stats = np.zeros(5, dtype=np.int64)
         self.wall, self.warmup = 0.0, 0.0
-        self.failure: str | None = None
+        self.failure: Failure | None = None
         self.exhausted = False
         self.spin = 0.0
         self.max_steps: int | None = None
@@ -231,9 +246,10 @@ class _Runner:
                 self.stats[4] = 0  # this call's share of steps, not the run bound: go on
                 t_end = t_reached
             if self.stats[4] == STATUS_STEP_LIMIT:  # the run bound, inside a call
-                self.failure = (f"{self.spec.name} stopped at t = {t_reached:.6g} s: it has "
-                                f"taken {int(self.stats[0]):.3g} steps, the run bound "
-                                "(--max-steps); " + budget_advice(self.spec, self.program))
+                self.failure = Failure(self.spec.name, "stopped", t_reached,
+                                       f"it has taken {int(self.stats[0]):.3g} steps, the run "
+                                       f"bound ({setting_ref('max_steps')})",
+                                       budget_advice(self.spec, self.program))
                 self.exhausted = True
                 return
             if self.stats[4] != 0 or t_reached < t_end:  # NaN, underflow, or stopped early
@@ -241,8 +257,8 @@ class _Runner:
                 return
             why = budget.exhausted(int(self.stats[0]), t_end / self.duration, self.max_steps)
             if why is not None:
-                self.failure = (f"{self.spec.name} stopped at t = {t_end:.6g} s: {why}; "
-                                + budget_advice(self.spec, self.program))
+                self.failure = Failure(self.spec.name, "stopped", t_end, why,
+                                       budget_advice(self.spec, self.program))
                 self.exhausted = True
                 return
             if self.progress is not None:
@@ -270,10 +286,10 @@ class _Runner:
         k = round((t - t0) / h) + max(1, round(length / h))
         return t1 if k >= n else t0 + k * h
 
-    def _failure_message(self, t_reached: float) -> str:
+    def _failure_message(self, t_reached: float) -> Failure:
         status = int(self.stats[4])
         what = "the state became NaN or infinite" if status == 1 else \
             "the step size fell below round-off (the problem is stiff or singular there)" \
             if status == 2 else "the integrator stopped early"
-        return (f"{self.spec.name} diverged at t = {t_reached:.6g} s: {what}; "
-                + stability_hint(self.program, self.setting, self.spec.name))
+        return Failure(self.spec.name, "diverged", t_reached, what,
+                       stability_hint(self.program, self.setting, self.spec.name))

@@ -163,7 +163,7 @@ def _mesh_body(spec: _MeshBodySpec) -> tuple[RigidBody, tuple[str, ...]]:
     try:  # the same checks as an explicit body: an open mesh (allow_open) can fail them
         body = RigidBody.from_inertia(float(props.mass), inertia, props.center_of_mass)
     except UnphysicalInertiaError as exc:
-        raise _with_place(type(exc)(f"{spec.path.name}: {exc}"), spec.field) from exc
+        raise _with_place(type(exc)(f"{spec.path.name}: {exc.template}"), spec.field) from exc
     used = mesh.vertices[np.unique(mesh.faces)]
     bounding_radius = float(np.linalg.norm(used - body.center_of_mass, axis=1).max())
     return dataclasses.replace(body, size=max(bounding_radius, body.size)), tuple(health.warnings)
@@ -175,12 +175,15 @@ def _mesh_files(path: Path) -> tuple[Path, ...]:
     return (path,) if pair is None else (path, path.with_suffix(pair))
 
 
+def _as_scene_key(name: str) -> str:
+    """A setting an error refers to (`massprops.errors.setting_ref`), as a mesh body's key."""
+    return f"{name}: true" if name in ("allow_open", "fill_holes", "union") else name
+
+
 def _with_place(exc: InputError, field: Field) -> InputError:
     """The same error class (so callers can still tell an open mesh from a bad scene), its
     message prefixed with the scene file, line and key path."""
-    # The mesh modules word their fixes for the command line; in a scene the option is a key.
-    message = one_line(field.where() + str(exc).replace("--allow-open", "allow_open: true")
-                       .replace("--fill-holes", "fill_holes: true"))
+    message = one_line(field.where() + exc.render(_as_scene_key))
     try:
         return type(exc)(message)
     except TypeError:  # a subclass with a different constructor

@@ -206,7 +206,7 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
         diagnostics=diagnostics, interrupted=run.interrupted)
     onset = _energy_blowup(traj, floor)  # only scenes that cannot gain energy carry an energy
     if onset is not None:  # name when it started, even if the state overflowed only later
-        later = f" ({run.failure.split(': ', 1)[1].split(';')[0]})" if run.failure else ""
+        later = f" ({run.failure.what})" if run.failure else ""
         raise DivergenceError(
             f"{scene.source}: {name} diverged near t = {onset:.6g} s: the energy grew by more "
             f"than {ENERGY_BLOWUP:.0e} times its initial value{later}; "

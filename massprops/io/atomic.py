@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import BinaryIO
 
-from massprops.errors import MassPropsError, MeshFileError, OutputExistsError
+from massprops.errors import MassPropsError, MeshFileError, OutputExistsError, setting_ref
 
 _TEMP_ATTEMPTS = 100
 
@@ -48,7 +48,8 @@ def check_destination(path: Path, *, force: bool, protect: Iterable[Path]) -> No
     if path.is_dir():
         raise MeshFileError(f"{path}: is a directory; expected an output file path")
     if (path.exists() or path.is_symlink()) and not force:
-        raise OutputExistsError(f"{path}: already exists; use force (--force) to overwrite it")
+        raise OutputExistsError(f"{path}: already exists; use {setting_ref('force')} to "
+                                f"overwrite it")
     parent = path.parent
     if not parent.is_dir():
         raise MeshFileError(f"{path}: the directory {parent} does not exist; create it first")
@@ -119,12 +120,12 @@ def _publish(tmp: Path, path: Path, overwrite: bool) -> None:
         os.link(tmp, path)
     except FileExistsError as exc:
         raise OutputExistsError(
-            f"{path}: already exists; use force (--force) to overwrite it"
+            f"{path}: already exists; use {setting_ref('force')} to overwrite it"
         ) from exc
     except OSError:  # a filesystem without hard links: check, then rename
         if path.exists():
             raise OutputExistsError(
-                f"{path}: already exists; use force (--force) to overwrite it"
+                f"{path}: already exists; use {setting_ref('force')} to overwrite it"
             ) from None
         os.replace(tmp, path)
 

@@ -10,7 +10,7 @@ from typing import BinaryIO, Union
 
 import numpy as np
 
-from massprops.errors import MeshFormatError, UnknownFormatError, UsageError
+from massprops.errors import MeshFormatError, UnknownFormatError, UsageError, setting_ref
 from massprops.io.atomic import atomic_write, check_destination
 from massprops.io.registry import UNITS, Format, format_named, format_of_path
 from massprops.io.source import Source
@@ -109,7 +109,8 @@ def _input_format(src: Source, format_name: str | None) -> Format:
         return fmt
     if src.path is None:
         raise UsageError(
-            f"{src.name}: the format of a stream cannot be guessed; name it (--input-format)"
+            f"{src.name}: the format of a stream cannot be guessed; name it "
+            f"({setting_ref('input_format')})"
         )
     return format_of_path(src.path, name=src.name)
 

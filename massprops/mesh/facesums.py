@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from massprops.errors import ComputationError, MeshFormatError
+from massprops.errors import ComputationError, MeshFormatError, setting_ref
 from massprops.mesh.topology import is_soup
 from massprops.mesh.value import Mesh
 
@@ -95,7 +95,8 @@ def face_sums(mesh: Mesh, origin: np.ndarray, *, accurate: bool, area: bool) -> 
             raise MeshFormatError(f"{mesh.name}: expected finite vertex coordinates, got NaN or "
                                   "infinity; fix or re-export the file")
         raise ComputationError(f"{mesh.name}: the integral overflowed: expected coordinates of a "
-                               "sane size, got products beyond 1e308; rescale the mesh (--unit)")
+                               f"sane size, got products beyond 1e308; rescale the mesh "
+                               f"({setting_ref('unit')})")
     return FaceSums(t[0], t[1], t[2:5], t[5:8], t[8:11], t[11:14],
                     t[14:17] if area else np.zeros(3), ext[:, :3].min(axis=0),
                     ext[:, 3:].max(axis=0), m, accurate)

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from massprops.errors import DegenerateMeshError, MeshFormatError, MeshTopologyError
+from massprops.errors import DegenerateMeshError, MeshFormatError, MeshTopologyError, setting_ref
 from massprops.mesh.geometry import area_vector_sums, exactly_flat, signed_volumes6
 from massprops.mesh.topology import Edges, connected_components, consistent_flips, edges, is_soup
 from massprops.mesh.value import Mesh
@@ -500,8 +500,8 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
                                     f"{n_open} boundary edges (total length "
                                     f"{_boundary_length(mesh, a):.6g} m"
                                     f"{'' if holes is None else ' in ' + holes}); use "
-                                    f"--fill-holes to cap them, or --allow-open to compute "
-                                    f"anyway")
+                                    f"{setting_ref('fill_holes')} to cap them, or "
+                                    f"{setting_ref('allow_open')} to compute anyway")
         # Volumes of an open surface depend on the origin: take them about the box centre.
         centre = _box_centre(mesh, a)
         det6 = np.where(rewind, -1.0, 1.0) * signed_volumes6(

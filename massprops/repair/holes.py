@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from massprops.errors import MeshTopologyError
+from massprops.errors import MeshTopologyError, setting_ref
 from massprops.mesh import Mesh
 from massprops.mesh.pieces import Welded
 from massprops.mesh.topology import consistent_flips
@@ -131,7 +131,8 @@ def fill_holes(mesh: Mesh, *, max_fraction: float | None = None,
                 problem = (f"{where} ({loop.ids.size} edges, length {length:.6g} m) would need a "
                            f"cap of {area:.6g} m², {_percent(area, surface)} of the surface area: "
                            f"too large to be a hole (limit {limit:g} of the surface; raise it "
-                           f"with --max-hole, or use --shell for a thin-walled or open part)")
+                           f"with {setting_ref('max_hole')}, or use {setting_ref('shell')} for a "
+                           f"thin-walled or open part)")
         if problem is not None:
             if not allow_open:
                 raise MeshTopologyError(f"{mesh.name}: {problem}")

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError
+from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError, setting_ref
 from massprops.inertia import parallel_axis_to_com
 from massprops.mesh import Mesh
 from massprops.mesh.facesums import BLOCK, U, gamma
@@ -106,7 +106,7 @@ def shell_properties(mesh: Mesh, thickness: float, *, density: float | None = No
     rows = np.flatnonzero(w.valid)
     if rows.size == 0:
         raise DegenerateMeshError(f"{mesh.name}: the surface has no area (no triangle with three "
-                                  f"distinct corners); --shell needs a surface")
+                                  f"distinct corners); {setting_ref('shell')} needs a surface")
     used = mesh.vertices[mesh.faces[rows]].reshape(-1, 3)
     if not np.isfinite(used).all():
         raise MeshFormatError(f"{mesh.name}: expected finite vertex coordinates, got NaN or "
@@ -115,7 +115,7 @@ def shell_properties(mesh: Mesh, thickness: float, *, density: float | None = No
     faces = _face_terms(mesh, rows, origin, thickness)
     if faces.area <= 0:
         raise DegenerateMeshError(f"{mesh.name}: the surface has no area (every triangle is a "
-                                  f"line or a point); --shell needs a surface")
+                                  f"line or a point); {setting_ref('shell')} needs a surface")
     normals, doubled = unit_normals(w.positions[w.tri])  # every face's, once
     met = joins(w, normals, doubled, origin, thickness)
     mo = _unit_moments(faces, met, thickness)

@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from massprops.errors import ComputationError
+from massprops.errors import ComputationError, setting_ref
 from massprops.mesh import Mesh
 from massprops.mesh.overlap import Composed, compose
 from massprops.mesh.pieces import Pieces, Welded, split_pieces
@@ -123,7 +123,7 @@ def _check_volume(composed: Composed, pieces: Pieces, name: str) -> None:
         raise ComputationError(f"{name}: the union of the pieces came out at {united:.6g} m³, "
                                f"not within 0..{solids:.6g} m³ (the solids together): some "
                                f"piece probably intersects itself; repair it, or inspect without "
-                               f"--union (overlaps then count twice)")
+                               f"{setting_ref('union')} (overlaps then count twice)")
 
 
 # --- the result ----------------------------------------------------------------------------------

@@ -14,7 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.errors import CheckFailedError, MassPropsError, RobotModelError, UsageError
+from massprops.errors import (
+    CheckFailedError,
+    MassPropsError,
+    RobotModelError,
+    UsageError,
+    error_message,
+    setting_ref,
+)
 from massprops.robot.combine import LinkMass, MeshCache, combine, integrate_geometry
 from massprops.robot.compare import Comparison, compare, validity_problems
 from massprops.robot.model import Link, RobotModel
@@ -95,7 +102,7 @@ class ModelReport:
     def require_agreement(self, rtol: float) -> None:
         """CheckFailedError (exit 4) naming the links that differ by more than ``rtol``."""
         if not (math.isfinite(rtol) and rtol >= 0):
-            raise UsageError(f"--check needs a tolerance >= 0, got {rtol!r}")
+            raise UsageError(f"{setting_ref('check')} needs a tolerance >= 0, got {rtol!r}")
         bad = self.failures(rtol)
         if bad:
             raise CheckFailedError(
@@ -179,7 +186,7 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         try:
             part = integrate_geometry(g, meshes)
         except MassPropsError as exc:
-            return skipped(f"{g.uri or g.kind} (line {g.node.line}): {exc}", True)
+            return skipped(f"{g.uri or g.kind} (line {g.node.line}): {error_message(exc)}", True)
         warnings.extend(f"{g.uri}: {w}" for w in part.warnings)
         parts.append(part)
     stated = link.stated

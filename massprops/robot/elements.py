@@ -14,6 +14,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from massprops.errors import setting_ref
+
 __all__ = ["WRITERS", "mjcf_inertial", "sdf_inertial", "urdf_inertial"]
 
 Writer = Callable[..., str]
@@ -83,8 +85,8 @@ def _no_principal(principal: bool, name: str) -> None:
         # deferred: writing a stated inertial needs no eigen-solver unless principal
         from massprops.errors import UsageError
 
-        raise UsageError(f"--principal is for --format mjcf (quat + diaginertia); {name} gets "
-                         "the tensor in the link axes")
+        raise UsageError(f"{setting_ref('principal')} is for {setting_ref('format')} mjcf (quat + "
+                         f"diaginertia); {name} gets the tensor in the link axes")
 
 
 WRITERS: dict[str, Writer] = {"urdf": urdf_inertial, "sdf": sdf_inertial, "mjcf": mjcf_inertial}

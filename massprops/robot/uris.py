@@ -15,6 +15,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
+from massprops.errors import setting_ref
+
 __all__ = ["resolve_uri"]
 
 _ENV = {"package": ("ROS_PACKAGE_PATH",),
@@ -49,7 +51,8 @@ def resolve_uri(uri: str, base: Path, description: Path,
     looked = ", ".join(str(r) for r in roots) or "(nowhere)"
     env = " or ".join(_ENV[scheme])
     return None, (f"cannot find {scheme} {package!r} for {uri!r} (looked in: {looked}); "
-                  f"give --package-path DIR (the folder holding {package}/) or set {env}")
+                  f"give {setting_ref('package_path')} DIR (the folder holding {package}/) or "
+                  f"set {env}")
 
 
 def _roots(scheme: str, description: Path, package_paths: Sequence[Path]) -> list[Path]:

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from massprops.errors import UsageError
+from massprops.errors import UsageError, setting_ref
 
 # --- stats : (5,) int64, accumulated (+=) by every kernel -----------------------------------------
 STEPS, NFEV, REJECTED, NJEV, STATUS = range(5)
@@ -74,7 +74,7 @@ def segment_runner(name: str, kind: str, kernel, *, scaled: bool = False) -> Run
     (their step counts are not known in advance: adaptive steps, implicit steps cut into pieces).
     """
     what = "step" if kind == "fixed" else "rtol"
-    fix = "time.step (or --step)" if kind == "fixed" else "time.rtol (or --rtol)"
+    fix = setting_ref("time.step") if kind == "fixed" else setting_ref("time.rtol")
 
     def run_segment(y, t0, t1, setting, program_arrays, rot_only, t_out, y_out, stats):
         t0, t1, setting, rot_only = float(t0), float(t1), float(setting), bool(rot_only)
