@@ -1,4 +1,10 @@
-"""Every numeric tolerance of massprops, each with the reason for its value."""
+"""Every numeric tolerance of massprops, each with the reason for its value.
+
+One exception, by design: the constants compiled into the dynamics kernels (Newton's stopping
+rule, the elliptic functions' and the exact solution's thresholds) stay in the module that
+compiles them, each saying so, because the kernels' cache is keyed by the dynamics package's own
+sources (`massprops.dynamics.compiled.cache`): a value here would not invalidate machine code
+compiled with its old value."""
 
 from __future__ import annotations
 
@@ -78,3 +84,37 @@ scale. Scene files carry ~10-17 digits, so a state typed from a closed form (sqr
 with 10 digits) passes, while any real mistake (a sign, a swapped axis, a metre off) fails with
 a message giving the consistent value. What passes is projected silently: the run always starts
 exactly on the joints."""
+
+WINDING_ATOL = 0.25
+"""A winding number further than this from an integer belongs to a point on (or next to)
+another piece's surface: inconclusive, ignored. Round-off is ~1e-12; a point on a face gives
+±0.5 and one on an edge or corner less."""
+
+ON_SURFACE_RTOL = 1e-9
+"""A query point whose solid-angle numerator and denominator with a triangle are both below this
+times the product of its distances to the corners lies in the triangle's plane and not outside
+it: on the surface, where the winding number jumps and is reported as NaN. Round-off of those
+terms is ~1e-16 of that product; a point off the surface by 1e-9 of its distances is reported as
+on it, which only withdraws a sample from the nesting vote."""
+
+BOOLEAN_VOLUME_RTOL = 1e-9
+"""The union of pieces (manifold3d) may hold more volume than the pieces together only by this
+fraction (its own float sums); beyond it the boolean's result is not trusted (a piece that cuts
+through itself, which no boolean defines): the overlap is then bounded instead of measured, and
+``--union`` refuses."""
+
+INERTIA_SYMMETRY_RTOL = 1e-12
+"""An explicit inertia tensor may be asymmetric by this fraction of its largest entry (a tensor
+typed with ~15 digits, or computed and printed elsewhere); beyond it, it is no inertia tensor."""
+
+INERTIA_POSITIVE_RTOL = 1e-15
+"""A principal moment at most this fraction of the largest counts as zero (a line mass): no body
+with volume has it, and Euler's equations divide by it."""
+
+INERTIA_TRIANGLE_RTOL = 1e-12
+"""A principal moment may exceed the sum of the other two by this fraction (rounding of a flat
+plate's moments, for which I3 = I1 + I2 exactly) before the tensor is refused as unphysical."""
+
+QUATERNION_NORM_ATOL = 0.5
+"""A sample whose quaternion norm is this far from 1 is no rotation: the kernels keep it within
+round-off of 1, so only a diverged state gets there."""

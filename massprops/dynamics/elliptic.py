@@ -52,15 +52,16 @@ __all__ = [
 
 _EPS = 2.220446049250313e-16
 _PARAM_ATOL = 4 * _EPS
-"""m + m1 may differ from 1 by rounding only: a larger gap means the caller passed two different
-parameters."""
+"""(Local, compiled into the kernels: see massprops.tolerances.) m + m1 may differ from 1 by
+rounding only: a larger gap means the caller passed two different parameters."""
 
 _SERIES_MAX_EXP = -7
 """The Maclaurin series is used at |u| <= 2^-7: its first omitted term, about 0.03 u^8 relative,
 is then below 4e-19."""
 
 _CARLSON_RTOL = _EPS
-"""Relative truncation error allowed in Carlson's series (his parameter r)."""
+"""(Local, compiled into the kernels: see massprops.tolerances.) Relative truncation error allowed
+in Carlson's series (his parameter r)."""
 
 _RF_Q = (3.0 * _CARLSON_RTOL) ** (-1.0 / 6.0)
 _RJ_Q = (0.25 * _CARLSON_RTOL) ** (-1.0 / 6.0)

@@ -76,12 +76,13 @@ drifted ~1e-18 per step, 5-10x a random walk). Normalising only once the norm ha
 |q| within ~4e-16 of 1 and the drift a random walk."""
 
 SYMMETRY_RTOL = 8 * _EPS
-"""Two principal moments whose difference is at most this times the largest are treated as equal
-(closed-form regular precession). The elliptic formulas divide by such a difference and are exact
-for any non-zero one, so this only catches round-off-level asymmetry (moments of a symmetric part
-computed from a mesh differ by a few ulps); the symmetric solution then differs from the exact one
-of the given moments by at most ~SYMMETRY_RTOL·|ω|·t (2e-13 rad at |ω|t = 100), below the target
-accuracy. Any larger asymmetry goes through the elliptic branch, which resolves it exactly."""
+"""(Local, compiled into the kernels: see massprops.tolerances.) Two principal moments whose
+difference is at most this times the largest are treated as equal (closed-form regular precession).
+The elliptic formulas divide by such a difference and are exact for any non-zero one, so this only
+catches round-off-level asymmetry (moments of a symmetric part computed from a mesh differ by a few
+ulps); the symmetric solution then differs from the exact one of the given moments by at most
+~SYMMETRY_RTOL·|ω|·t (2e-13 rad at |ω|t = 100), below the target accuracy. Any larger asymmetry
+goes through the elliptic branch, which resolves it exactly."""
 
 EVAL_BLOCK = 65536
 """Instants evaluated together by numpy in `free_rotation`: the temporaries of a block (~100

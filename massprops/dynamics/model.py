@@ -19,6 +19,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from massprops.errors import UnphysicalInertiaError
+from massprops.tolerances import (
+    INERTIA_POSITIVE_RTOL,
+    INERTIA_SYMMETRY_RTOL,
+    INERTIA_TRIANGLE_RTOL,
+)
 
 if TYPE_CHECKING:
     from massprops.dynamics.joints.model import Joint
@@ -65,7 +70,7 @@ class RigidBody:
         """A body from an explicit inertia tensor about the COM in body axes.
 
         Raises UnphysicalInertiaError unless the tensor is symmetric, positive definite and each
-        principal moment is at most the sum of the other two (to a relative 1e-12).
+        principal moment is at most the sum of the other two (see tolerances.INERTIA_*).
         """
         from massprops.inertia import principal_axes  # one place for the eigen-decomposition
 
@@ -76,13 +81,13 @@ class RigidBody:
             raise UnphysicalInertiaError(
                 f"inertia must be a finite 3x3 matrix, got shape {j.shape}")
         scale = float(np.abs(j).max())
-        if scale == 0 or np.abs(j - j.T).max() > 1e-12 * scale:
+        if scale == 0 or np.abs(j - j.T).max() > INERTIA_SYMMETRY_RTOL * scale:
             raise UnphysicalInertiaError("inertia is not symmetric (or is zero)")
         moments, axes = principal_axes(0.5 * (j + j.T))
-        if moments[0] <= 1e-15 * moments[2]:
+        if moments[0] <= INERTIA_POSITIVE_RTOL * moments[2]:
             raise UnphysicalInertiaError(
                 f"inertia is not positive definite: principal moments {moments.tolist()}")
-        if moments[2] > (moments[0] + moments[1]) * (1 + 1e-12):
+        if moments[2] > (moments[0] + moments[1]) * (1 + INERTIA_TRIANGLE_RTOL):
             raise UnphysicalInertiaError(
                 "inertia violates the triangle inequality: largest principal moment "
                 f"{float(moments[2])!r} exceeds the sum of the others "

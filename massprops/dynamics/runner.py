@@ -20,6 +20,7 @@ from massprops.dynamics.integrators.base import STATUS_STEP_LIMIT
 from massprops.dynamics.model import Scene
 from massprops.dynamics.program import initial_principal_state
 from massprops.errors import ComputationError, setting_ref
+from massprops.tolerances import QUATERNION_NORM_ATOL
 
 CHUNK_STEPS = 50_000
 """Steps per compiled call (~0.05 s): between calls Ctrl-C and the progress bar are served.
@@ -110,11 +111,6 @@ def run_once(scene: Scene, program: ForceProgram, spec, setting: float, t_out: n
         t_kept, y_kept = t_kept[:first], y_kept[:first]
     return RawRun(t_kept, y_kept, runner.stats, runner.wall, runner.warmup, failure,
                   interrupted, runner.short_err, runner.exhausted)
-
-
-QUATERNION_NORM_ATOL = 0.5
-"""A sample whose quaternion norm is this far from 1 is no rotation: the kernels keep it within
-round-off of 1, so only a diverged state gets there."""
 
 
 def unusable_rows(y: np.ndarray) -> np.ndarray:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from massprops.parallel import in_halves
-from massprops.tolerances import EPS
+from massprops.tolerances import EPS, ON_SURFACE_RTOL
 
 _CHUNK = 1 << 15  # rows per block of chunked passes: temporaries stay in cache, not in new pages
 
@@ -102,7 +102,8 @@ def winding_numbers(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """(q,) winding number of each point (q, 3) w.r.t. triangles (t, 3, 3): Σ signed solid angle
     / 4π, Van Oosterom & Strackee (1983). 1 inside a closed outward surface, 0 outside, -1 inside
     an inward one; not an integer for an open surface. NaN for a point on one of the triangles
-    (to ~1e-9 relative), where the solid angle jumps by 4π and the sign of a zero decides."""
+    (to ``ON_SURFACE_RTOL`` relative), where the solid angle jumps by 4π and the sign of a zero
+    decides."""
     q = points.shape[0]
     w = np.zeros(q)
     on = np.zeros(q, bool)
@@ -118,7 +119,7 @@ def winding_numbers(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
         num = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
         den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
                + (ax * cx + ay * cy + az * cz) * lb + (bx * cx + by * cy + bz * cz) * la)
-        scale = 1e-9 * la * lb * lc  # in the plane and not outside the triangle: on it
+        scale = ON_SURFACE_RTOL * la * lb * lc  # in the plane and not outside the triangle
         on |= np.any((np.abs(num) <= scale) & (den <= scale), axis=1)
         w += np.arctan2(num, den).sum(axis=1)
     w /= 2 * np.pi

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from massprops.mesh.geometry import winding_numbers
+from massprops.tolerances import WINDING_ATOL
 
 SAMPLE_BUDGET = 1 << 22
 """Point-triangle pairs to spend per piece: each piece gives SAMPLE_BUDGET // m sample vertices,
@@ -37,12 +38,6 @@ shared box first)."""
 PROBE_THICKNESS = 1e-9
 """A shared box thinner than this fraction of the larger piece's size in some axis is a touch
 (round-off of a shared face), not a shared volume: not probed."""
-
-WINDING_ATOL = 0.25
-"""A winding number further than this from an integer belongs to a point on (or next to)
-another piece's surface: inconclusive, ignored. Round-off is ~1e-12; a point on a face gives
-±0.5 and one on an edge or corner less."""
-
 
 @dataclass(frozen=True, eq=False)
 class Windings:

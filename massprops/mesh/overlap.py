@@ -11,6 +11,7 @@ import numpy as np
 
 from massprops.mesh.pieces import Pieces, Welded, split_pieces
 from massprops.mesh.value import Mesh
+from massprops.tolerances import BOOLEAN_VOLUME_RTOL
 
 
 def overlap_warning(mesh: Mesh, volumes: np.ndarray, overlaps: list[tuple[int, int]]) -> str:
@@ -25,7 +26,7 @@ def overlap_warning(mesh: Mesh, volumes: np.ndarray, overlaps: list[tuple[int, i
         united = composed.result.volume() + sum(composed.skipped_volumes)
     except ImportError:
         united = None
-    if united is not None and -1e-9 * abs(total) <= total - united <= abs(total):
+    if united is not None and -BOOLEAN_VOLUME_RTOL * abs(total) <= total - united <= abs(total):
         extra = max(total - united, 0.0)  # else the boolean misbehaved: give the bound below
         return (f"the pieces share {extra:.3g} m³ ({_percent(extra, total)} of the {total:.6g} m³ "
                 f"reported), measured from their union: that volume is counted more than once; "

@@ -27,6 +27,7 @@ from massprops.mesh import Mesh
 from massprops.mesh.overlap import Composed, compose
 from massprops.mesh.pieces import Pieces, Welded, split_pieces
 from massprops.repair.bars import Regions
+from massprops.tolerances import BOOLEAN_VOLUME_RTOL
 
 U = 2.0**-53
 
@@ -119,7 +120,7 @@ def _check_volume(composed: Composed, pieces: Pieces, name: str) -> None:
     cut through themselves, which no boolean defines)."""
     solids = float(sum(pieces.volumes[k] for k in composed.solids))
     united = composed.result.volume()
-    if united > solids * (1 + 1e-9) or united < 0:
+    if united > solids * (1 + BOOLEAN_VOLUME_RTOL) or united < 0:
         raise ComputationError(f"{name}: the union of the pieces came out at {united:.6g} m³, "
                                f"not within 0..{solids:.6g} m³ (the solids together): some "
                                f"piece probably intersects itself; repair it, or inspect without "

@@ -86,8 +86,9 @@ def lu_solve(a, piv, b):
 MAX_ITER = 10
 """Iterations allowed per step before the step counts as failed."""
 NEWTON_TOL = 1e-14
-"""Stop when the predicted remaining correction η‖Δ‖ is below this (‖·‖: max over components of
-|Δ_i| / the scale of i's block, see the package contract)."""
+"""(Local, compiled into the kernels: see massprops.tolerances.) Stop when the predicted remaining
+correction η‖Δ‖ is below this (‖·‖: max over components of |Δ_i| / the scale of i's block, see the
+package contract)."""
 ROUNDOFF = 1e-14
 """A correction this small (same norm) is round-off: converged, whatever the rate says."""
 
