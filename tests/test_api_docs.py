@@ -17,6 +17,7 @@ import massprops
 EXAMPLES = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "api.md").read_text(), re.S)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("code", EXAMPLES, ids=[f"example{i}" for i in range(len(EXAMPLES))])
 def test_api_examples_run(code, monkeypatch, capsys):
     monkeypatch.chdir(ROOT)

@@ -220,6 +220,7 @@ def _pool_batch(paths, monkeypatch, **kwargs):
     return inspect_many(paths, jobs=2, **kwargs)
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_local_pool_gives_the_records_of_one_process(tmp_path, monkeypatch):
     paths = [str(p) for p in mixed_batch(tmp_path, 14)]
@@ -232,6 +233,7 @@ def test_local_pool_gives_the_records_of_one_process(tmp_path, monkeypatch):
                                              for p in rel]
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(90)
 def test_killed_local_worker_is_replaced_and_every_file_reported_once(tmp_path, monkeypatch):
     mesh = torus_obj(tmp_path / "t.obj", 100, 100)

@@ -77,6 +77,7 @@ def test_jobs_1_prints_what_the_one_process_loop_printed(run, tmp_path, out_form
     assert want_code == 1 and want_out.count('"file"' if flag else "principal moments") == 9
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 @pytest.mark.parametrize("out_format", ["json", "csv", "table"])
 def test_jobs_2_prints_the_bytes_of_jobs_1(run, tmp_path, pool_always, out_format):
@@ -272,6 +273,7 @@ def test_standard_input_joins_a_parallel_batch_in_its_place(run, tmp_path, pool_
                                                           paths[2]]
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(90)
 def test_progress_bar_and_summary_on_a_terminal_only(tmp_path):
     import pty
@@ -316,6 +318,7 @@ def test_debug_raises_the_error_with_its_traceback(run, tmp_path, pool_always):
     ["--fill-holes", "--max-hole", "0.3", "--json"],
     ["--shell", "0.002", "--density", "7850"],
 ], ids=["urdf", "mjcf-principal", "union-table", "fill-holes-json", "shell-table"])
+@pytest.mark.slow
 def test_robot_formats_and_repairs_in_workers_print_the_bytes_of_one_process(
         run, pool_always, args):
     """The other inspect options reach the workers unchanged (repairs as one RepairOptions) and

@@ -40,6 +40,7 @@ def test_cluster_run_prints_the_bytes_of_one_process(run, tmp_path, threads_clus
     assert cluster.exit_code == local.exit_code == 1
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(120)
 def test_lost_worker_mid_batch_still_reports_every_file_once(tmp_path):
     paths = [str(torus_obj(tmp_path / f"t{k:02d}.obj", 100, 80, shift=(0, k, 0)))

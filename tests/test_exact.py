@@ -108,6 +108,7 @@ def test_legendre_integrals_against_mpmath(m1_text):
                 assert abs(ellippi(n, phi, m_f, m1_f) - p_ref) <= tol, (phi, n)
 
 
+@pytest.mark.slow
 def test_carlson_integrals_against_mpmath():
     rng = np.random.default_rng(7)
     args = 10.0 ** rng.uniform(-20, 5, size=(120, 4))
@@ -217,6 +218,7 @@ NEAR_SEPARATRIX = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("inertia, omega0", NEAR_SEPARATRIX.values(), ids=NEAR_SEPARATRIX.keys())
 def test_near_separatrix_against_30_digit_taylor(inertia, omega0):
     """Through a flip, 1e-8 from the separatrix: agreement to 1e-13 after 40 s."""

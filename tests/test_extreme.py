@@ -56,6 +56,7 @@ def scene(body, forces=(), duration=1.0, integrator="auto", omega=(0.0, 0.0, 0.0
 
 
 # --- the needle of the issue -------------------------------------------------------------------
+@pytest.mark.slow
 @pytest.mark.timeout(300)
 def test_needle_precision_ladder_completes_with_a_row_per_rung():
     sc = scene(NEEDLE, duration=2.0, omega=(1000.0, 1.0, 0.5))
@@ -73,6 +74,7 @@ def test_needle_precision_ladder_completes_with_a_row_per_rung():
     assert min(r["error"] for r in rk4) < 1e-6
 
 
+@pytest.mark.slow
 def test_needle_precision_cli_json(run, tmp_path):
     path = tmp_path / "needle.yaml"
     path.write_text(NEEDLE_YAML)
@@ -210,6 +212,7 @@ def forces_of(kind: str, body: RigidBody, spin: float, k: float):
        k=st.sampled_from([1.0, 1e6, 1e12]),
        integrator=st.sampled_from(["auto", "exact", "rk4", "dop853", "implicit", "midpoint",
                                    "splitting", "splitting4", "splitting6"]))
+@pytest.mark.slow
 def test_every_run_ends_in_a_result_or_a_clean_error(moments, spin, duration, forces, k,
                                                      integrator):
     body = RigidBody.from_inertia(1.0, np.diag(moments))

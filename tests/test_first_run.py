@@ -59,6 +59,7 @@ def test_an_exact_run_imports_neither_numba_nor_scipy_special(tmp_path):
     assert not (tmp_path / "cache").exists() or not any((tmp_path / "cache").iterdir())
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(300)
 def test_the_compile_notice_is_one_stderr_line_on_a_cache_miss_only(tmp_path):
     path = tmp_path / "torqued.yaml"
@@ -124,6 +125,7 @@ def test_a_held_body_in_closed_form_needs_no_compiler(tmp_path):
     assert result["integrator"] == "exact" and len(result["final"]["joints"]) == 1
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(300)
 def test_kernels_built_with_the_package_load_without_compiling_wherever_it_is_installed(
         tmp_path, run):

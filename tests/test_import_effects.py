@@ -36,6 +36,7 @@ def _files(folder) -> list[str]:
 
 
 @pytest.mark.slow
+@pytest.mark.slow
 @pytest.mark.parametrize("own_cache", [False, True],
                          ids=["no NUMBA_CACHE_DIR", "own NUMBA_CACHE_DIR"])
 def test_importing_every_module_changes_nothing(tmp_path, own_cache):

@@ -158,6 +158,7 @@ def _quats(m):
     return matrix_to_quat(m)
 
 
+@pytest.mark.slow
 def test_heavy_top_closed_form_against_euler_equations_about_the_pivot():
     res = simulate(parse(top(Q_TOP, W_TOP, 4.0)))
     assert res.integrator == "exact" and res.steps == 0
@@ -408,6 +409,7 @@ def test_trajectory_files_carry_the_reaction_columns(tmp_path):
     ("tilted 1e-3 rad: passes 2e-5 rad from the top", 1e-3, [0.3, 0.0, 20.0]),
     ("steady precession at 60°", None, None),
 ], ids=["top", "plane", "bottom", "near-top", "steady"])
+@pytest.mark.slow
 def test_the_closed_form_through_and_near_the_poles(case, angle, w_body):
     """The branches of the half-angle form (a pole passed exactly, a turning point a hair from
     one, a double root) against Euler's equations about the pivot in scipy."""

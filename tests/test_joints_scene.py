@@ -249,6 +249,7 @@ def json_final(result) -> dict:
     return json.loads(result.stdout)["final"]
 
 
+@pytest.mark.slow
 def test_simulate_json_plot_and_trajectory_of_a_hinge(run, tmp_path):
     pytest.importorskip("matplotlib")
     path = tmp_path / "scene.yaml"

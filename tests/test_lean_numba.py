@@ -68,6 +68,7 @@ def test_cli_runs_without_cffi_and_blas_and_leaves_imports_working(tmp_path, int
     assert probe["scipy_linalg"] is False and probe["left_hidden"] == []
 
 
+@pytest.mark.slow
 def test_library_use_keeps_numbas_cffi_and_blas(tmp_path):
     path = tmp_path / "scene.yaml"
     path.write_text(SCENE, encoding="utf-8")

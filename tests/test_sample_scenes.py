@@ -257,6 +257,7 @@ def top_axis_and_pivot(traj) -> tuple[np.ndarray, np.ndarray]:
     return a[:, :, 2], traj.position + a @ TOP_PIVOT
 
 
+@pytest.mark.slow
 def test_heavy_top_on_a_stiff_pivot_precesses_at_the_gyroscopic_rate():
     top = scene("heavy_top_stiff")
     assert np.allclose(top.body.principal_moments, np.sort(TOP_MOMENTS), rtol=1e-14)
@@ -276,6 +277,7 @@ def test_heavy_top_on_a_stiff_pivot_precesses_at_the_gyroscopic_rate():
     assert np.abs(pivot).max() < 1e-5  # the pivot stays at the anchor to ~ m g / k
 
 
+@pytest.mark.slow
 def test_heavy_top_with_a_strong_damper_goes_implicit_and_the_pivot_creeps_home():
     """Overdamped pivot (c = 1e7, k = 1e8): the offset decays as exp(-k t / c) (the slow root
     k/c (1 + O(k m / c²)) with k m / c² = 5e-6) down to the dynamic deflection of the precessing,
@@ -297,6 +299,7 @@ def test_heavy_top_with_a_strong_damper_goes_implicit_and_the_pivot_creeps_home(
 
 
 # --- a long run: 1e6 steps of the splitting method ---------------------------------------------
+@pytest.mark.slow
 def test_long_run_keeps_momentum_and_norm_at_round_off_and_energy_without_drift():
     """1e6 Strang steps (1.4 s of compiled work here, so the full count). The spring acts at the
     centre of mass: the rotation is torque-free, each drift its exact flow, so |H| (world) may
@@ -526,6 +529,7 @@ HONESTY_FLOOR = 1e3
 """Only rungs whose true error exceeds this × the reference's own accuracy count."""
 
 
+@pytest.mark.slow
 def test_error_estimates_are_honest_over_the_suite(monkeypatch):
     """Issue requirement: true error <= 10 × error_estimate in at least 95 % of the runs, and the
     estimate is not uselessly pessimistic (median estimate / true within 0.1 ... 10). Every

@@ -158,6 +158,7 @@ def test_a_companion_the_method_refuses_leaves_the_result_without_estimate():
     assert res.trajectory.t[-1] == 0.05 and np.all(np.isfinite(res.trajectory.orientation))
 
 
+@pytest.mark.slow
 def test_progress_is_monotonic_and_ends_at_one():
     seen = []
     sim.simulate(scene(integrator="rk4", step=1e-5, duration=3.0), progress=seen.append)

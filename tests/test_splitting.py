@@ -202,6 +202,7 @@ def test_constant_torque_about_a_principal_axis_is_exact(name, axis, rot_only):
     assert rotation_angle_error(y_out[:, o:o + 4], q_exact) < 1e-7  # arccos: ~sqrt(eps)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("moments", [(1.0, 2.0, 3.0), (1.0, 1.0, 3.0)],
                          ids=["asymmetric", "symmetric"])
 def test_a_million_torque_free_steps_keep_the_invariants_at_round_off(moments):
@@ -226,6 +227,7 @@ def test_a_million_torque_free_steps_keep_the_invariants_at_round_off(moments):
     assert np.abs(np.linalg.norm(y_out[:, 6:10], axis=1) - 1).max() <= 6 * np.finfo(float).eps
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["splitting4", "splitting6"])
 def test_compositions_with_backward_substeps_keep_a_free_rotation(name):
     """Gravity at the COM: kicks change v only, so the rotation stays free through the
@@ -301,6 +303,7 @@ def energy_error_windows(name, step=0.02, duration=1000.0):
     return de[:tenth].max(), de[-tenth:].max(), de.max() / abs(e[0])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name,bound", [("splitting", 3e-3), ("splitting4", 3e-7),
                                         ("splitting6", 3e-10)], ids=list(METHODS))
 def test_energy_error_is_bounded_without_drift(name, bound):

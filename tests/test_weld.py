@@ -113,6 +113,7 @@ def test_edges_match_a_counter(n_ids, m, seed):
     assert_edges(distinct_triangles(n_ids, m, seed), n_ids)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damage", ["none", "hole", "flipped", "doubled"])
 def test_edges_of_a_large_torus_match_a_counter(damage):
     """Larger than two blocks, so the keys are made and sorted on two threads."""
