@@ -13,8 +13,13 @@ from massprops.cad.read import CadFile, CadSolid, read_cad
 from massprops.errors import MeshTopologyError, SceneError, UsageError
 from massprops.facesums import U
 from massprops.inertia import parallel_axis, principal_axes, rotate_inertia
-from massprops.mass import (ErrorBars, MassProperties, Uncertainty, check_density_mass,
-                            properties_from_moments)
+from massprops.mass import (
+    ErrorBars,
+    MassProperties,
+    Uncertainty,
+    check_density_mass,
+    properties_from_moments,
+)
 
 __all__ = ["CadInspection", "SolidResult", "inspect_cad", "load_density_map"]
 

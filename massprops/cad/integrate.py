@@ -24,8 +24,12 @@ import numpy as np
 from massprops.errors import DegenerateMeshError
 from massprops.facesums import U
 from massprops.mass import UnitMoments
-from massprops.tolerances import (CAD_ADAPTIVE_EPS, CAD_INTEGRATION_SAFETY, CAD_ROUNDING_ULPS,
-                                  MIN_VOLUME_TO_ERROR)
+from massprops.tolerances import (
+    CAD_ADAPTIVE_EPS,
+    CAD_INTEGRATION_SAFETY,
+    CAD_ROUNDING_ULPS,
+    MIN_VOLUME_TO_ERROR,
+)
 
 __all__ = ["ANALYTIC_FACES", "SolidIntegral", "integrate_solid"]
 
@@ -60,8 +64,8 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     from OCP.BRepBndLib import BRepBndLib
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
     from OCP.BRepGProp import BRepGProp
-    from OCP.GProp import GProp_GProps
     from OCP.gp import gp_Trsf, gp_Vec
+    from OCP.GProp import GProp_GProps
 
     box = Bnd_Box()
     BRepBndLib.Add_s(shape, box, False)   # the geometry's box, not padded by tolerances

@@ -111,9 +111,9 @@ def _read_brep(name: str, unit: str) -> CadFile:
 
 def _read_xcaf(name: str, fmt: str, unit: str | None) -> CadFile:
     # optional extra: OCP is imported only once a CAD file is read
+    from OCP.collections import Sequence_TDF_Label as TDF_LabelSequence
     from OCP.Interface import Interface_Static
     from OCP.TCollection import TCollection_ExtendedString
-    from OCP.collections import Sequence_TDF_Label as TDF_LabelSequence
     from OCP.TDocStd import TDocStd_Document
     from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
@@ -202,9 +202,7 @@ def _label_name(label: Any) -> str:
 
 def _colour(colours: Any, label: Any) -> tuple[float, float, float] | None:
     from OCP.Quantity import Quantity_Color  # optional extra
-    from OCP.XCAFDoc import XCAFDoc_ColorType
-
-    from OCP.XCAFDoc import XCAFDoc_ColorTool
+    from OCP.XCAFDoc import XCAFDoc_ColorTool, XCAFDoc_ColorType
 
     colour = Quantity_Color()
     for kind in (XCAFDoc_ColorType.XCAFDoc_ColorSurf, XCAFDoc_ColorType.XCAFDoc_ColorGen):

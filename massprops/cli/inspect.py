@@ -49,10 +49,14 @@ from massprops.errors import UsageError, exit_code
               help="Run on the Dask cluster of this scheduler (pip install 'massprops[dask]'); "
                    "workers must see the same paths.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary line.")
+@click.option("--density-map", metavar="FILE.yaml", default=None,
+              help="CAD files: solid names or glob patterns to densities in kg/m³ (first "
+                   "match in file order; others take --density).")
 @click.pass_context
 def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_format: str,
             principal: bool, jobs: int | None, recursive: bool, files_from: str | None,
-            null: bool, scheduler: str | None, quiet: bool, **mesh_options: Any) -> None:
+            null: bool, scheduler: str | None, quiet: bool, density_map: str | None,
+            **mesh_options: Any) -> None:
     """Mass, centre of mass, inertia tensor, principal moments and axes of each MESH.
 
     MESH is a file (OBJ, STL, .vf/.vtx/.fac, PLY, OFF, ...), '-' for standard input, a
@@ -69,6 +73,15 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
     out_format = "json" if as_json else output_format
     if not meshes and files_from is None:
         raise click.UsageError("give MESH arguments or --files-from FILE")
+    from massprops.cad import is_cad_path  # no OpenCASCADE: extensions only
+
+    if meshes and files_from is None and all(is_cad_path(m) for m in meshes):
+        from massprops.cli.cad import inspect_cad_files  # the CAD branch, named files only
+
+        ctx.exit(inspect_cad_files(ctx, meshes, out_format, principal, options, density_map))
+    if density_map is not None:
+        raise click.UsageError("--density-map applies to CAD files (.step .stp .iges .igs "
+                               ".brep)")
     if "-" in meshes and options["format"] is None:
         raise click.UsageError("reading standard input ('-') needs --input-format")
     if "-" in meshes and files_from == "-":
