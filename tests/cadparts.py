@@ -25,7 +25,7 @@ from OCP.TCollection import TCollection_ExtendedString
 from OCP.TDataStd import TDataStd_Name
 from OCP.TDocStd import TDocStd_Document
 from OCP.TopAbs import TopAbs_EDGE
-from OCP.TopExp import TopExp_Explorer
+from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
@@ -101,8 +101,8 @@ def filleted_box(a: float, r: float, at: tuple = (0.0, 0.0, 0.0)):
     from OCP.TopoDS import TopoDS
     while explorer.More():
         edge = TopoDS.Edge(explorer.Current())
-        curve, t0, t1 = BRep_Tool.Curve_s(edge, 0.0, 0.0)
-        p, q = curve.Value(t0), curve.Value(t1)
+        p = BRep_Tool.Pnt_s(TopExp.FirstVertex_s(edge))
+        q = BRep_Tool.Pnt_s(TopExp.LastVertex_s(edge))
         key = (round(p.X(), 9), round(p.Y(), 9))
         if abs(p.X() - q.X()) < 1e-12 * a and abs(p.Y() - q.Y()) < 1e-12 * a and key not in seen:
             seen.add(key)
@@ -146,10 +146,10 @@ def moved(shape, offset):
 
 def write_step(shape, path, unit: str = "M") -> None:
     """One shape to STEP; coordinates are taken as ``unit`` (no scaling)."""
+    writer = STEPControl_Writer()   # first: creating it initialises the parameters below
     for key in ("write.step.unit", "xstep.cascade.unit"):
-        Interface_Static.SetCVal_s(key, unit)
+        assert Interface_Static.SetCVal_s(key, unit)
     try:
-        writer = STEPControl_Writer()
         writer.Transfer(shape, STEPControl_AsIs)
         assert int(writer.Write(str(path))) == 1
     finally:
@@ -175,9 +175,9 @@ def write_assembly(parts, path, name: str = "assembly") -> None:
         trsf.SetTranslation(gp_Vec(*offset))
         tool.AddComponent(top, label, TopLoc_Location(trsf))
     tool.UpdateAssemblies()
+    writer = STEPCAFControl_Writer()
     for key in ("write.step.unit", "xstep.cascade.unit"):
         Interface_Static.SetCVal_s(key, "MM")
-    writer = STEPCAFControl_Writer()
     writer.SetNameMode(True)
     assert writer.Transfer(doc, STEPControl_AsIs)
     assert int(writer.Write(str(path))) == 1
