@@ -65,6 +65,7 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
     from OCP.BRepGProp import BRepGProp
     from OCP.gp import gp_Trsf, gp_Vec
+    from OCP.TopLoc import TopLoc_Location
     from OCP.GProp import GProp_GProps
 
     box = Bnd_Box()
@@ -74,6 +75,12 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     reach = (hi - lo) / 2
     trsf = gp_Trsf()
     trsf.SetTranslation(gp_Vec(*(-origin)))
+    # the placement goes INTO the geometry with the shift: left as a location, BRepGProp would
+    # add it back to every point of geometry shifted by -origin (a far part: 20 % wrong)
+    placement = shape.Location()
+    if not placement.IsIdentity():
+        trsf = trsf.Multiplied(placement.Transformation())
+        shape = shape.Located(TopLoc_Location())
     local = BRepBuilderAPI_Transform(shape, trsf, True).Shape()
 
     faces, tolerance = _faces_and_tolerance(local)
