@@ -98,9 +98,9 @@ def test_brep_takes_its_unit_from_the_option(tmp_path):
 
 
 def test_open_shell_refused_unless_allowed(tmp_path):
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
     from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
 
     box = cp.make("box", 1.0)
     sewing = BRepBuilderAPI_Sewing()
@@ -128,8 +128,8 @@ def test_missing_extra_names_the_file_and_the_install(monkeypatch):
 def test_tessellation_cross_check(kind):
     """The exact mesh integral of a fine tessellation differs from the CAD result by no more
     than the chord deflection's first-order bound (deflection x area)."""
-    from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf
 
     from massprops.cad.integrate import integrate_solid
 
@@ -182,11 +182,11 @@ def test_cli_json_and_urdf(assembly, tmp_path):
 def test_mesh_commands_do_not_import_opencascade(tmp_path):
     (tmp_path / "t.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
                                     "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
-    code = ("import sys, runpy; sys.argv = ['massprops', 'inspect', %r, '--json'];\n"
+    obj = str(tmp_path / "t.obj")
+    code = (f"import sys, runpy; sys.argv = ['massprops', 'inspect', {obj!r}, '--json']\n"
             "try:\n    runpy.run_module('massprops', run_name='__main__')\n"
             "except SystemExit:\n    pass\n"
-            "assert not any(m.startswith('OCP') for m in sys.modules), 'OCP imported'\n"
-            % str(tmp_path / "t.obj"))
+            "assert not any(m.startswith('OCP') for m in sys.modules), 'OCP imported'\n")
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=120)
     assert run.returncode == 0, run.stderr

@@ -65,8 +65,8 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
     from OCP.BRepGProp import BRepGProp
     from OCP.gp import gp_Trsf, gp_Vec
-    from OCP.TopLoc import TopLoc_Location
     from OCP.GProp import GProp_GProps
+    from OCP.TopLoc import TopLoc_Location
 
     box = Bnd_Box()
     BRepBndLib.Add_s(shape, box, False)   # the geometry's box, not padded by tolerances
