@@ -190,3 +190,29 @@ def test_mesh_commands_do_not_import_opencascade(tmp_path):
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=120)
     assert run.returncode == 0, run.stderr
+
+
+def test_align_writes_exact_geometry_in_the_principal_frame(assembly, tmp_path):
+    from massprops.cad.write import align_cad
+    from massprops.errors import OutputExistsError
+
+    before = inspect_cad(assembly)
+    props = before.total[0]
+    for name in ("aligned.step", "aligned.brep"):
+        aligned = align_cad(before, tmp_path / name)
+        assert not aligned.tessellated
+        # BREP carries no unit: the geometry was written in the input's (mm)
+        after = inspect_cad(tmp_path / name, unit="mm" if name.endswith("brep") else None
+                            ).total[0]
+        size = props.volume ** (1 / 3)
+        # the COM at the origin and the inertia diagonal, up to the far part's round-off
+        assert np.max(np.abs(after.center_of_mass)) <= 1e-9 * FAR * 1e-3
+        assert after.mass == pytest.approx(props.mass, rel=1e-12)
+        off = after.inertia - np.diag(np.diag(after.inertia))
+        assert np.max(np.abs(off)) <= 1e-9 * props.principal_moments.max()
+        assert np.allclose(np.diag(after.inertia), props.principal_moments, rtol=1e-9)
+        assert size > 0
+    with pytest.raises(OutputExistsError):
+        align_cad(before, assembly, force=True)
+    aligned = align_cad(before, tmp_path / "aligned.stl")
+    assert aligned.tessellated and (tmp_path / "aligned.stl").stat().st_size > 0

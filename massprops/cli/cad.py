@@ -78,3 +78,32 @@ def _table(d: dict) -> None:
         bar = bars.get(kind)
         if bar is not None:
             click.echo(f"  ± {kind:<15} volume {bar['volume']:.2g} m³, mass {bar['mass']:.2g} kg")
+
+
+def align_cad_file(ctx: click.Context, input_path: str, output_path: str, force: bool,
+                   as_json: bool, options: dict[str, Any]) -> int:
+    """``align IN.step OUT``: the whole moved into its principal frame (exact or tessellated)."""
+    unit = options.get("unit")
+    if ctx.get_parameter_source("unit") is click.core.ParameterSource.DEFAULT:
+        unit = None
+
+    def run() -> None:
+        # the CAD branch of the library: imported only when a CAD file is named
+        from massprops.cad.inspect import inspect_cad
+        from massprops.cad.write import align_cad
+
+        result = inspect_cad(input_path, density=options.get("density"),
+                             mass=options.get("mass"), unit=unit,
+                             allow_open=options.get("allow_open", False))
+        for record in result.as_dicts():
+            for w in record["warnings"]:
+                say_warning(f"{record['file']}: {record['path'] or record['solid']}", w)
+        aligned = align_cad(result, output_path, force=force)
+        if as_json:
+            emit_json({"input": input_path, "output": output_path, **aligned.as_dict()})
+        else:
+            how = "tessellated" if aligned.tessellated else "exact geometry"
+            click.echo(f"{input_path} -> {output_path} ({how}): principal moments "
+                       + "  ".join(f"{x:.10e}" for x in aligned.principal_moments) + " kg·m²")
+
+    return guarded(ctx, run)
