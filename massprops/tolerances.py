@@ -79,13 +79,17 @@ with 10 digits) passes, while any real mistake (a sign, a swapped axis, a metre 
 a message giving the consistent value. What passes is projected silently: the run always starts
 exactly on the joints."""
 
-CAD_ADAPTIVE_EPS = (1e-10, 1e-12, 1e-14)
+CAD_ADAPTIVE_EPS = (1e-12, 1e-14)
 """Free-form (NURBS) CAD faces: the nested relative tolerances given to OpenCASCADE's adaptive
 integration. Its own error estimate cannot be trusted (it reports 2e-16 where the result is 1e-9
 off), but its results at tolerances two decades apart converge geometrically (measured on NURBS
 spheres, tori, cylinders, cones: each step ~14x closer), so the last difference bounds the
 last result's error with a margin of ~15x. 1e-14 is the finest level that still moves: below it
 the results no longer change (the rule's floor), so a finer level would fake agreement."""
+
+CAD_ADAPTIVE_FALLBACK_EPS = 1e-10
+"""When the two levels above agree exactly (both at the rule's floor on that part), agreement
+proves nothing: the level this much coarser is run too, and its difference makes the bar."""
 
 CAD_INTEGRATION_SAFETY = 2.0
 """The integration bar is this multiple of the difference between the last two adaptive levels

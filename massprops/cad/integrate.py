@@ -26,6 +26,7 @@ from massprops.facesums import U
 from massprops.mass import UnitMoments
 from massprops.tolerances import (
     CAD_ADAPTIVE_EPS,
+    CAD_ADAPTIVE_FALLBACK_EPS,
     CAD_INTEGRATION_SAFETY,
     CAD_ROUNDING_ULPS,
     MIN_VOLUME_TO_ERROR,
@@ -73,15 +74,22 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     lo, hi = _corner(box.CornerMin()), _corner(box.CornerMax())
     origin = (lo + hi) / 2
     reach = (hi - lo) / 2
-    trsf = gp_Trsf()
-    trsf.SetTranslation(gp_Vec(*(-origin)))
-    # the placement goes INTO the geometry with the shift: left as a location, BRepGProp would
-    # add it back to every point of geometry shifted by -origin (a far part: 20 % wrong)
-    placement = shape.Location()
-    if not placement.IsIdentity():
-        trsf = trsf.Multiplied(placement.Transformation())
-        shape = shape.Located(TopLoc_Location())
-    local = BRepBuilderAPI_Transform(shape, trsf, True).Shape()
+    if np.max(np.abs(origin)) <= np.max(reach):
+        # the world origin is already within the part's own size of it: integrating there
+        # loses at most a few ulps more, and the copy would cost as much as the integral
+        origin = np.zeros(3)
+        local = shape
+    else:
+        trsf = gp_Trsf()
+        trsf.SetTranslation(gp_Vec(*(-origin)))
+        # the placement goes INTO the geometry with the shift: left as a location, BRepGProp
+        # would add it back to every point of geometry shifted by -origin (a far part: 20 %
+        # wrong)
+        placement = shape.Location()
+        if not placement.IsIdentity():
+            trsf = trsf.Multiplied(placement.Transformation())
+            shape = shape.Located(TopLoc_Location())
+        local = BRepBuilderAPI_Transform(shape, trsf, True).Shape()
 
     faces, tolerance = _faces_and_tolerance(local)
     free_form = any(kind not in ANALYTIC_FACES for kind in faces)
@@ -99,6 +107,10 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
             props = GProp_GProps()
             BRepGProp.VolumeProperties_s(local, props, eps, only_closed)
             levels.append(_values(props))
+        if levels[-1][0] == levels[-2][0]:
+            props = GProp_GProps()
+            BRepGProp.VolumeProperties_s(local, props, CAD_ADAPTIVE_FALLBACK_EPS, only_closed)
+            levels.insert(0, _values(props))
     volume, com, inertia = levels[-1]
 
     n = sum(faces.values())
@@ -168,24 +180,21 @@ def face_types(shape: Any) -> dict[str, int]:
 
 def _faces_and_tolerance(shape: Any) -> tuple[dict[str, int], float]:
     """({surface type: count}, the largest face/edge/vertex tolerance) in the file unit."""
-    from OCP.BRep import BRep_Tool  # optional extra
-    from OCP.BRepAdaptor import BRepAdaptor_Surface
-    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
+    from OCP.BRepAdaptor import BRepAdaptor_Surface  # optional extra
+    from OCP.ShapeAnalysis import ShapeAnalysis_ShapeTolerance
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_SHAPE
     from OCP.TopExp import TopExp_Explorer
     from OCP.TopoDS import TopoDS
 
-    faces: dict[str, int] = {}
-    tolerance = 0.0
+    counts: dict[Any, int] = {}
     explorer = TopExp_Explorer(shape, TopAbs_FACE)
     while explorer.More():
-        face = TopoDS.Face(explorer.Current())
-        kind = _SURFACE_NAMES.get(BRepAdaptor_Surface(face, False).GetType().name, "other")
-        faces[kind] = faces.get(kind, 0) + 1
-        tolerance = max(tolerance, BRep_Tool.Tolerance_s(face))
+        kind = BRepAdaptor_Surface(TopoDS.Face(explorer.Current()), False).GetType()
+        counts[kind] = counts.get(kind, 0) + 1
         explorer.Next()
-    for kind, cast in ((TopAbs_EDGE, TopoDS.Edge), (TopAbs_VERTEX, TopoDS.Vertex)):
-        explorer = TopExp_Explorer(shape, kind)
-        while explorer.More():
-            tolerance = max(tolerance, BRep_Tool.Tolerance_s(cast(explorer.Current())))
-            explorer.Next()
-    return faces, tolerance
+    faces: dict[str, int] = {}
+    for kind, n in counts.items():
+        name = _SURFACE_NAMES.get(kind.name, "other")
+        faces[name] = faces.get(name, 0) + n
+    tolerance = ShapeAnalysis_ShapeTolerance().Tolerance(shape, 1, TopAbs_SHAPE)  # 1: largest
+    return faces, float(tolerance)
