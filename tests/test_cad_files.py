@@ -216,3 +216,18 @@ def test_align_writes_exact_geometry_in_the_principal_frame(assembly, tmp_path):
         align_cad(before, assembly, force=True)
     aligned = align_cad(before, tmp_path / "aligned.stl")
     assert aligned.tessellated and (tmp_path / "aligned.stl").stat().st_size > 0
+
+
+def test_iges_round_trip_and_its_printed_digits(assembly, tmp_path):
+    from massprops.cad.write import align_cad
+
+    before = inspect_cad(assembly)
+    align_cad(before, tmp_path / "aligned.igs")
+    after = inspect_cad(tmp_path / "aligned.igs")
+    assert after.file.format == "iges" and after.file.unit == "mm"
+    assert after.total[0].mass == pytest.approx(before.total[0].mass, rel=1e-12)
+    # 10 printed digits: the far ball (1.3e8 mm out) is uncertain by ~1e-2 mm of its surface,
+    # far above its modelling tolerance
+    far = max(after.solids, key=lambda r: abs(r.properties.center_of_mass).max())
+    area = 4 * math.pi * 4.0**2 * 1e-6
+    assert far.input.volume >= area * 0.5 * 1e-9 * FAR * 1e-3
