@@ -7,7 +7,8 @@ package costs nothing and mesh commands never load the ~0.8 s kernel.
 Modules: ``occ`` (the kernel import and its missing-extra error), ``read`` (files to solids with
 names, assembly paths, placements and units), ``integrate`` (one solid about a local origin, with
 its error bars), ``inspect`` (per-solid results, densities by name, the total), ``write`` (align:
-exact geometry moved into the principal frame, or tessellated).
+exact geometry moved into the principal frame, or tessellated), ``tessellate`` (a shape as
+triangles).
 """
 
 from __future__ import annotations
