@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
+from collections.abc import Iterator
 
 from massprops.errors import InputError
 
-__all__ = ["CadExtraMissingError", "require_occ"]
+__all__ = ["CadExtraMissingError", "quiet_stdout", "require_occ"]
 
 
 class CadExtraMissingError(InputError):
@@ -34,3 +37,26 @@ def require_occ(path: str | os.PathLike) -> None:
     for printer in list(messenger.Printers()):
         messenger.RemovePrinter(printer)
     _READY = True
+
+
+@contextlib.contextmanager
+def quiet_stdout() -> Iterator[None]:
+    """Send file descriptor 1 to /dev/null while OpenCASCADE runs: some of its readers print
+    on C++ std::cout (BRepTools on a foreign file), which would corrupt a JSON stdout."""
+    with contextlib.suppress(AttributeError, ValueError, OSError):
+        sys.stdout.flush()
+    try:
+        saved = os.dup(1)
+    except OSError:   # no descriptor 1 (an embedding host): nothing to protect
+        yield
+        return
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, 1)
+        finally:
+            os.close(devnull)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from massprops.cad.occ import require_occ
+from massprops.cad.occ import quiet_stdout, require_occ
 from massprops.errors import MeshFileError, MeshFormatError, UnknownFormatError, UsageError
 
 __all__ = ["CadFile", "CadSolid", "UNIT_METRES", "read_cad"]
@@ -99,7 +99,8 @@ def _read_brep(name: str, unit: str) -> CadFile:
 
     shape = TopoDS_Shape()
     try:
-        ok = BRepTools.Read_s(shape, name, BRep_Builder())
+        with quiet_stdout():
+            ok = BRepTools.Read_s(shape, name, BRep_Builder())
     except Exception as exc:  # the binding raises its own types on a malformed file
         raise MeshFormatError(f"{name}: not a readable BREP file ({exc}); check the file") from exc
     if not ok or shape.IsNull():
@@ -128,8 +129,10 @@ def _read_xcaf(name: str, fmt: str, unit: str | None) -> CadFile:
         # the document's own length unit, else XCAF rescales to millimetres
         XCAFDoc_DocumentTool.SetLengthUnit_s(doc, UNIT_METRES[file_unit])
         reader = _xcaf_reader(fmt)
-        status = reader.ReadFile(name)
-        if int(status) != 1 or not reader.Transfer(doc):  # IFSelect_RetDone
+        with quiet_stdout():
+            status = reader.ReadFile(name)
+            done = int(status) == 1 and reader.Transfer(doc)  # 1: IFSelect_RetDone
+        if not done:
             raise MeshFormatError(f"{name}: not a readable {fmt.upper()} file (translator status "
                                   f"{status}); check that the file is complete")
     finally:
@@ -180,7 +183,11 @@ def _file_unit(name: str, fmt: str) -> tuple[str, str]:
         if int(reader.ReadFile(name)) != 1:
             raise MeshFormatError(f"{name}: not a readable IGES file; check that the file is "
                                   "complete")
-        found = [reader.IGESModel().GlobalSection().UnitName().ToCString().lower()]
+        unit_name = reader.IGESModel().GlobalSection().UnitName()
+        if unit_name is None or reader.IGESModel().NbEntities() == 0:
+            raise MeshFormatError(f"{name}: not a readable IGES file (no global section or no "
+                                  "entities); check that the file is complete")
+        found = [unit_name.ToCString().lower()]
     for text in found:
         key = text.strip().strip("'").split()[0] if text.strip() else ""
         if key in _FILE_UNITS:

@@ -19,23 +19,42 @@ def inspect_cad_files(ctx: click.Context, paths: tuple[str, ...], out_format: st
         unit = None  # the file's own unit (BREP: metres)
     if options.get("repairs") is not None:
         raise click.UsageError("--fill-holes, --union and --shell apply to meshes, not to CAD "
-                               "solids")
+                               "files; for a surface as a wall, tessellate it first: massprops "
+                               "align IN.step OUT.stl, then inspect OUT.stl --shell T")
     if out_format == "csv":
         raise click.UsageError("--format csv is for meshes; use --json for CAD files")
+    from massprops.cli.inspect import _silence_stdout, _StdoutClosed
+
     worst = 0
-    for path in paths:
-        def run(path: str = path) -> None:
-            # the CAD branch of the library: imported only when a CAD file is named
-            from massprops.cad.inspect import inspect_cad, load_density_map
-
-            mapping = None if density_map is None else load_density_map(density_map)
-            result = inspect_cad(path, density=options.get("density"),
-                                 mass=options.get("mass"), unit=unit, density_map=mapping,
-                                 allow_open=options.get("allow_open", False))
-            _show(result, out_format, principal)
-
-        worst = max(worst, guarded(ctx, run))
+    try:
+        for path in paths:
+            worst = max(worst, _inspect_one(ctx, path, out_format, principal, options, unit,
+                                            density_map))
+    except _StdoutClosed:   # the reader of stdout went away (| head): stop, quietly
+        _silence_stdout()
+        return max(worst, 1)
     return worst
+
+
+def _inspect_one(ctx: click.Context, path: str, out_format: str, principal: bool,
+                 options: dict[str, Any], unit: str | None, density_map: str | None) -> int:
+    """One CAD file: its exit code (errors reported as one line by ``guarded``)."""
+    from massprops.cli.inspect import _StdoutClosed
+
+    def run() -> None:
+        # the CAD branch of the library: imported only when a CAD file is named
+        from massprops.cad.inspect import inspect_cad, load_density_map
+
+        mapping = None if density_map is None else load_density_map(density_map)
+        result = inspect_cad(path, density=options.get("density"), mass=options.get("mass"),
+                             unit=unit, density_map=mapping,
+                             allow_open=options.get("allow_open", False))
+        try:
+            _show(result, out_format, principal)
+        except BrokenPipeError as exc:
+            raise _StdoutClosed from exc
+
+    return guarded(ctx, run)
 
 
 def _show(result: Any, out_format: str, principal: bool) -> None:

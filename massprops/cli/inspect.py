@@ -75,7 +75,11 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
         raise click.UsageError("give MESH arguments or --files-from FILE")
     from massprops.cad import is_cad_path  # no OpenCASCADE: extensions only
 
-    if meshes and files_from is None and all(is_cad_path(m) for m in meshes):
+    cad_files = [m for m in meshes if is_cad_path(m)]
+    if cad_files:
+        if len(cad_files) < len(meshes) or files_from is not None:
+            raise click.UsageError("give CAD files (.step .stp .iges .igs .brep) and meshes "
+                                   "in separate commands")
         from massprops.cli.cad import inspect_cad_files  # the CAD branch, named files only
 
         ctx.exit(inspect_cad_files(ctx, meshes, out_format, principal, options, density_map))
