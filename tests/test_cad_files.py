@@ -232,3 +232,27 @@ def test_iges_round_trip_and_its_printed_digits(assembly, tmp_path):
     area = 4 * math.pi * 4.0**2 * 1e-6
     largest = FAR * 1e-3 / math.sqrt(3)   # its largest coordinate after the rotation, m
     assert far.input.volume >= area * 0.5e-9 * largest
+
+
+def test_colour_from_the_file_is_reported(tmp_path):
+    from OCP.Quantity import Quantity_Color, Quantity_TOC_RGB
+    from OCP.STEPCAFControl import STEPCAFControl_Writer
+    from OCP.STEPControl import STEPControl_AsIs
+    from OCP.TCollection import TCollection_ExtendedString
+    from OCP.TDataStd import TDataStd_Name
+    from OCP.TDocStd import TDocStd_Document
+    from OCP.XCAFDoc import XCAFDoc_ColorType, XCAFDoc_DocumentTool
+
+    doc = TDocStd_Document(TCollection_ExtendedString("t"))
+    XCAFDoc_DocumentTool.SetLengthUnit_s(doc, 0.001)
+    label = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main()).AddShape(cp.make("box", 1.0), False)
+    TDataStd_Name.Set_s(label, TCollection_ExtendedString("redbox"))
+    XCAFDoc_DocumentTool.ColorTool_s(doc.Main()).SetColor(
+        label, Quantity_Color(1.0, 0.0, 0.0, Quantity_TOC_RGB), XCAFDoc_ColorType.XCAFDoc_ColorGen)
+    writer = STEPCAFControl_Writer()
+    writer.SetColorMode(True)
+    writer.SetNameMode(True)
+    assert writer.Transfer(doc, STEPControl_AsIs)
+    assert int(writer.Write(str(tmp_path / "red.step"))) == 1
+    record = inspect_cad(tmp_path / "red.step").as_dicts()[0]
+    assert record["solid"] == "redbox" and record["cad"]["colour"] == [1.0, 0.0, 0.0]
