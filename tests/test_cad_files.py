@@ -256,3 +256,18 @@ def test_colour_from_the_file_is_reported(tmp_path):
     assert int(writer.Write(str(tmp_path / "red.step"))) == 1
     record = inspect_cad(tmp_path / "red.step").as_dicts()[0]
     assert record["solid"] == "redbox" and record["cad"]["colour"] == [1.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("fmt", ("step", "iges"))
+def test_units_round_trip(fmt, tmp_path):
+    """A sphere of radius 2 written in m, mm and inches reads back in that unit (converted
+    after integrating)."""
+    from massprops.cad.write import _write_native
+
+    for unit, metres in (("m", 1.0), ("mm", 1e-3), ("in", 0.0254)):
+        path = tmp_path / f"s_{unit}.{fmt}"
+        assert _write_native(cp.make("sphere", 2.0), fmt, unit, str(path))
+        result = inspect_cad(path)
+        assert result.file.unit == unit
+        assert result.solids[0].properties.volume == pytest.approx(
+            4 * math.pi * 8 / 3 * metres**3, rel=1e-14)

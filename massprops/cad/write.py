@@ -133,8 +133,12 @@ def _write_native(shape: Any, kind: str, unit: str, path: str) -> bool:
             return int(writer.Write(path)) == 1
         from OCP.IGESControl import IGESControl_Writer
 
-        Interface_Static.SetCVal_s("xstep.cascade.unit", _OCC_UNITS[unit])
         writer = IGESControl_Writer(_OCC_UNITS[unit], 1)   # 1: B-rep mode (solids)
+        # the shape's numbers are in the file's unit already: tell the translator so (its
+        # "cascade unit", in millimetres), or it rescales them as if they were millimetres
+        section = writer.Model().GlobalSection()
+        section.SetCascadeUnit(section.UnitValue())
+        writer.Model().SetGlobalSection(section)
         writer.AddShape(shape)
         writer.ComputeModel()
         return bool(writer.Write(path))
