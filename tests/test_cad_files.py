@@ -271,3 +271,12 @@ def test_units_round_trip(fmt, tmp_path):
         assert result.file.unit == unit
         assert result.solids[0].properties.volume == pytest.approx(
             4 * math.pi * 8 / 3 * metres**3, rel=1e-14)
+
+
+def test_total_mass_sets_one_uniform_density(assembly):
+    result = inspect_cad(assembly, mass=2.0)
+    densities = {r.properties.density for r in result.solids}
+    assert len(densities) == 1
+    assert result.total[0].mass == pytest.approx(2.0, rel=1e-14)
+    with pytest.raises(UsageError):
+        inspect_cad(assembly, mass=2.0, density_map=[("pin", 1.0)])
