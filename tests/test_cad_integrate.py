@@ -113,3 +113,15 @@ def test_nurbs_bar_is_honest(kind):
             worst = int(np.argmax(err_j))
             assert err_j[worst] <= np.diag(bar_j)[worst]
             assert np.diag(bar_j)[worst] <= 100 * err_j[worst]
+
+
+def test_invalid_free_form_shape_is_flagged():
+    """A torus converted to NURBS 1e11 sizes from the origin comes out broken (the kernel's
+    conversion, not the integral: moved back exactly it integrates the same); the check says
+    so, where the nested levels alone cannot."""
+    a = 1000.0
+    at = (0.7e11, -0.3e11, 1e11)
+    broken = cp.nurbs(cp.make("torus", a, at))
+    assert integrate_solid(broken, 1.0, "broken").valid is False
+    good = cp.moved(cp.nurbs(cp.make("torus", a)), at)
+    assert integrate_solid(good, 1.0, "good").valid is True

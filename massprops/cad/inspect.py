@@ -149,6 +149,10 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
         notes = [] if solid.closed else [
             "open shell integrated as if closed (--allow-open): the volume depends on where "
             "the origin is and is not a property of the part"]
+        if integral.valid is False:
+            notes.append("not a valid shape (OpenCASCADE's BRepCheck): the integral and its "
+                         "bars describe the surfaces as stored, which may not bound the "
+                         "intended solid; repair or re-export it from the CAD tool")
         placement = solid.placement.copy()
         placement[:3, 3] *= cad.scale
         results.append(SolidResult(solid, placement, integral, props,

@@ -45,7 +45,10 @@ class SolidIntegral:
     (all faces analytic) or (volume m³, com (3,) m, inertia (3, 3) m⁵) bounds of the
     quadrature's remaining error. tolerance : the largest modelling tolerance of its faces,
     edges and vertices, m. area : m². reach : (3,) m, the bounding box's half extents.
-    faces : {type: count}."""
+    faces : {type: count}. valid : OpenCASCADE's BRepCheck verdict for solids with free-form
+    faces (None: not checked; for analytic solids the check would cost more than the
+    integral). An invalid shape (seen: a torus converted to NURBS 1e11 sizes from the origin)
+    can integrate to anything, and the nested levels may agree on it."""
 
     origin: np.ndarray
     moments: UnitMoments
@@ -54,6 +57,7 @@ class SolidIntegral:
     area: float
     reach: np.ndarray
     faces: dict[str, int]
+    valid: bool | None = None
 
 
 def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = True
@@ -126,16 +130,19 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     com_err = k * box_volume / volume * reach + 2 * U * np.abs(com)
     inertia_err = np.full((3, 3), k * box_volume * float(reach @ reach))
 
-    integration = None
+    integration, valid = None, None
     if free_form:
         integration = _integration_bar(levels)
+        from OCP.BRepCheck import BRepCheck_Analyzer  # optional extra
+
+        valid = bool(BRepCheck_Analyzer(local).IsValid())
     s = scale
     moments = UnitMoments(volume * s**3, volume_err * s**3, com * s, com_err * s,
                           inertia * s**5, inertia_err * s**5)
     if integration is not None:
         integration = (integration[0] * s**3, integration[1] * s, integration[2] * s**5)
     return SolidIntegral(origin * s, moments, integration, tolerance * s, area * s * s,
-                         reach * s, faces)
+                         reach * s, faces, valid)
 
 
 def _integration_bar(levels: list) -> tuple[float, np.ndarray, np.ndarray]:
