@@ -191,12 +191,16 @@ def _integration(integral: SolidIntegral, props: MassProperties) -> Uncertainty 
 
 def _input(integral: SolidIntegral, props: MassProperties, cad: CadFile) -> Uncertainty | None:
     """First order: every surface point may lie anywhere within the modelling tolerance τ
-    (plus half the last printed digit for IGES), so ∫g dV moves by at most max|g| τ A
+    (plus 2 ulps of the largest coordinate, plus half the last printed digit for IGES), so ∫g dV
+    moves by at most max|g| τ A
     (the mesh ``input`` bar's argument with η = τ in every direction)."""
-    tau = integral.tolerance
+    far = float(np.max(np.abs(integral.origin) + integral.reach))
+    # float64 itself: far from the origin every stored point and pole is rounded to half an
+    # ulp of its coordinates (a NURBS torus 1e10 sizes out is 7e-7 off in volume: its poles
+    # moved independently); 2 ulps leave margin for the poles' weights
+    tau = integral.tolerance + 2 * float(np.spacing(far))
     if cad.digits is not None:
-        far = np.abs(integral.origin) + integral.reach
-        tau += float(np.max(far)) * 0.5 * 10.0 ** (1 - cad.digits)
+        tau += far * 0.5 * 10.0 ** (1 - cad.digits)
     if tau == 0:
         return None
     flux = 1.01 * tau * integral.area
