@@ -118,3 +118,25 @@ plate's moments, for which I3 = I1 + I2 exactly) before the tensor is refused as
 QUATERNION_NORM_ATOL = 0.5
 """A sample whose quaternion norm is this far from 1 is no rotation: the kernels keep it within
 round-off of 1, so only a diverged state gets there."""
+
+CAD_ADAPTIVE_EPS = (1e-12, 1e-14)
+"""Free-form (NURBS) CAD faces: the nested relative tolerances given to OpenCASCADE's adaptive
+integration. Its own error estimate cannot be trusted (it reports 2e-16 where the result is 1e-9
+off), but its results at tolerances two decades apart converge geometrically (measured on NURBS
+spheres, tori, cylinders, cones: each step ~14x closer), so the last difference bounds the
+last result's error with a margin of ~15x. 1e-14 is the finest level that still moves: below it
+the results no longer change (the rule's floor), so a finer level would fake agreement."""
+
+CAD_ADAPTIVE_FALLBACK_EPS = 1e-10
+"""When the two levels above agree exactly (both at the rule's floor on that part), agreement
+proves nothing: the level this much coarser is run too, and its difference makes the bar."""
+
+CAD_INTEGRATION_SAFETY = 2.0
+"""The integration bar is this multiple of the difference between the last two adaptive levels
+(the geometric convergence above leaves a true error ~1/15 of it; 2 covers a slower step)."""
+
+CAD_ROUNDING_ULPS = 64.0
+"""OpenCASCADE's integral offers no rounding bound: the bar charges this many units of
+round-off per face on each quantity's natural scale about the local origin (Gauss sums of a few
+hundred terms per face, each exact to a few ulps); measured errors on analytic solids are
+1-4 ulps per solid, far inside."""

@@ -23,6 +23,12 @@ def align(ctx: click.Context, input_path: str, output_path: str, force: bool, as
     principal axes, ascending moments). Faces and winding are unchanged; with --union OUT is
     the united mesh, with --fill-holes the capped one."""
     options = inspect_kwargs(mesh_options)
+    from massprops.cad import is_cad_path  # no OpenCASCADE: extensions only
+
+    if is_cad_path(input_path):
+        from massprops.cli.cad import align_cad_file  # the CAD branch, CAD inputs only
+
+        ctx.exit(align_cad_file(ctx, input_path, output_path, force, as_json, options))
 
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)

@@ -4,8 +4,11 @@ keyword arguments)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import re
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -171,3 +174,22 @@ def inspect_kwargs(mesh_options: dict[str, Any]) -> dict[str, Any]:
     check_mass_options(options["density"], options["mass"])
     options["repairs"] = repair_options(*(mesh_options[k] for k in _REPAIR_OPTIONS))
     return options
+
+
+# --- standard output closed by its reader (``... | head``) ---
+class StdoutClosed(BaseException):
+    """Standard output was closed by its reader (``... | head``): the batch stops (no error
+    line per remaining file, no work for nobody). A BaseException, so guarded lets it by."""
+
+
+def to_stdout(write: Callable[[], None]) -> None:
+    try:
+        write()
+    except BrokenPipeError as exc:
+        raise StdoutClosed from exc
+
+
+def silence_stdout() -> None:
+    """Point the closed stdout at /dev/null, so that the flush at exit does not fail again."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):  # no real descriptor
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

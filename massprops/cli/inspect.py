@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from typing import Any
 
 import click
@@ -14,6 +14,7 @@ from massprops.cli.app import cli
 from massprops.cli.common import (
     ELEMENT_FORMATS,
     INSPECT_FORMATS,
+    StdoutClosed,
     cli_text,
     emit_json,
     guarded,
@@ -21,6 +22,8 @@ from massprops.cli.common import (
     mass_options,
     say_error,
     say_warning,
+    silence_stdout,
+    to_stdout,
 )
 from massprops.errors import UsageError, error_message, exit_code
 
@@ -50,10 +53,14 @@ from massprops.errors import UsageError, error_message, exit_code
               help="Run on the Dask cluster of this scheduler (pip install 'massprops[dask]'); "
                    "workers must see the same paths.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary line.")
+@click.option("--density-map", metavar="FILE.yaml", default=None,
+              help="CAD files: solid names or glob patterns to densities in kg/m³ (first "
+                   "match in file order; others take --density).")
 @click.pass_context
 def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_format: str,
             principal: bool, jobs: int | None, recursive: bool, files_from: str | None,
-            null: bool, scheduler: str | None, quiet: bool, **mesh_options: Any) -> None:
+            null: bool, scheduler: str | None, quiet: bool, density_map: str | None,
+            **mesh_options: Any) -> None:
     """Mass, centre of mass, inertia tensor, principal moments and axes of each MESH.
 
     MESH is a file (OBJ, STL, .vf/.vtx/.fac, PLY, OFF, ...), '-' for standard input, a
@@ -70,6 +77,19 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
     out_format = "json" if as_json else output_format
     if not meshes and files_from is None:
         raise click.UsageError("give MESH arguments or --files-from FILE")
+    from massprops.cad import is_cad_path  # no OpenCASCADE: extensions only
+
+    cad_files = [m for m in meshes if is_cad_path(m)]
+    if cad_files:
+        if len(cad_files) < len(meshes) or files_from is not None:
+            raise click.UsageError("give CAD files (.step .stp .iges .igs .brep) and meshes "
+                                   "in separate commands")
+        from massprops.cli.cad import inspect_cad_files  # the CAD branch, named files only
+
+        ctx.exit(inspect_cad_files(ctx, meshes, out_format, principal, options, density_map))
+    if density_map is not None:
+        raise click.UsageError("--density-map applies to CAD files (.step .stp .iges .igs "
+                               ".brep)")
     if "-" in meshes and options["format"] is None:
         raise click.UsageError("reading standard input ('-') needs --input-format")
     if "-" in meshes and files_from == "-":
@@ -148,15 +168,15 @@ def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool
                 # deferred: csv loads only for --format csv
                 from massprops.batch.table import csv_header
 
-                _to_stdout(lambda: _echo_text(csv_header()))
+                to_stdout(lambda: _echo_text(csv_header()))
         for record in batch:  # Ctrl-C lands here, while waiting for the next record
             with ctrl_c.deferred():  # ... never half-way through printing one
                 show(record)
                 if progress is not None:
                     progress.update(counts["done"], counts["failed"], batch.total)
-    except _StdoutClosed:
+    except StdoutClosed:
         batch.interrupt()
-        _silence_stdout()
+        silence_stdout()
         say_summary(interrupted=True)
         return max(counts["worst"], 1)  # the output could not be written
     except KeyboardInterrupt:
@@ -227,55 +247,35 @@ def _show_record(ctx: click.Context, record: Any, out_format: str, principal: bo
             # deferred: csv loads only for --format csv
             from massprops.batch.table import csv_row
 
-            _to_stdout(lambda: _echo_text(csv_row(record)))
+            to_stdout(lambda: _echo_text(csv_row(record)))
         return error.exit_code
 
     def emit() -> None:
         for w in record.warnings:
             say_warning(record.file, w)
         if out_format == "json":
-            _to_stdout(lambda: emit_json(record.data))
+            to_stdout(lambda: emit_json(record.data))
         elif out_format == "csv":
             # deferred: csv loads only for --format csv
             from massprops.batch.table import csv_row
 
-            _to_stdout(lambda: _echo_text(csv_row(record)))
+            to_stdout(lambda: _echo_text(csv_row(record)))
         elif out_format in ELEMENT_FORMATS:
             # deferred: only --format urdf|sdf|mjcf writes elements
             from massprops.robot.elements import WRITERS
 
             d = record.data
-            _to_stdout(lambda: click.echo(f"<!-- {record.file} -->"))
+            to_stdout(lambda: click.echo(f"<!-- {record.file} -->"))
             element = WRITERS[out_format](d["mass"], d["center_of_mass"], d["inertia"],
                                           principal=principal)
-            _to_stdout(lambda: click.echo(element))
+            to_stdout(lambda: click.echo(element))
         else:
             # deferred: rich loads only for human-readable output
             from massprops.cli.report import print_inspection
 
-            _to_stdout(lambda: print_inspection(record.data, record.repaired))
+            to_stdout(lambda: print_inspection(record.data, record.repaired))
 
     return guarded(ctx, emit)
-
-
-class _StdoutClosed(BaseException):
-    """Standard output was closed by its reader (``... | head``): the batch stops (no error
-    line per remaining file, no work for nobody). A BaseException, so guarded lets it by."""
-
-
-def _to_stdout(write: Callable[[], None]) -> None:
-    try:
-        write()
-    except BrokenPipeError as exc:
-        raise _StdoutClosed from exc
-
-
-def _silence_stdout() -> None:
-    """Point the closed stdout at /dev/null, so that the flush at exit does not fail again."""
-    import os
-
-    with contextlib.suppress(OSError, ValueError, AttributeError):  # no real descriptor
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def _echo_text(text: str) -> None:

@@ -1,0 +1,209 @@
+"""CAD parts: massprops against the plain OpenCASCADE call, side by side in one process.
+
+The peer is what CadQuery's ``Volume``/``CenterOfMass``/``MatrixOfInertia`` and FreeCAD's
+``Shape.Volume``/``CenterOfMass``/``MatrixOfInertia`` do: ``BRepGProp.VolumeProperties`` on the
+shape where it sits (about the world origin), default Gauss rule or its adaptive rule at ``eps``.
+Solids are made with the same kernel, so the closed forms are the truth.
+
+    python benchmarks/bench_cad.py          (needs pip install "massprops[cad]")
+
+Tables: (1) analytic parts, time ratio (target <= 3x); (2) a cylinder moved 10^k sizes away,
+relative inertia error of each; (3) NURBS forms, time against accuracy reached (the peer at
+several tolerances, massprops with its error bar); (4) a plate with 256 filleted holes read
+from STEP and integrated, time ratio (target <= 2x).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import time
+
+import numpy as np
+from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert, BRepBuilderAPI_Transform
+from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
+from OCP.BRepGProp import BRepGProp
+from OCP.BRepPrimAPI import (
+    BRepPrimAPI_MakeBox,
+    BRepPrimAPI_MakeCylinder,
+    BRepPrimAPI_MakeSphere,
+    BRepPrimAPI_MakeTorus,
+)
+from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec
+from OCP.GProp import GProp_GProps
+from OCP.Interface import Interface_Static
+from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader, STEPControl_Writer
+
+from massprops.cad.inspect import inspect_cad
+from massprops.cad.integrate import integrate_solid
+from massprops.cad.occ import require_occ
+
+require_occ("bench")  # silence the translators
+
+
+def plain(shape, eps=None):
+    """The peer: (volume, COM (3,), inertia about the COM (3, 3))."""
+    p = GProp_GProps()
+    if eps is None:
+        BRepGProp.VolumeProperties_s(shape, p)
+    else:
+        BRepGProp.VolumeProperties_s(shape, p, eps, True)
+    c, m = p.CentreOfMass(), p.MatrixOfInertia()
+    return p.Mass(), np.array([c.X(), c.Y(), c.Z()]), np.array(
+        [[m.Value(i, k) for k in (1, 2, 3)] for i in (1, 2, 3)])
+
+
+def best_time(fn, repeat=7, number=None):
+    if number is None:
+        t = time.perf_counter()
+        fn()
+        once = time.perf_counter() - t
+        number = max(1, int(0.02 / max(once, 1e-7)))
+    best = math.inf
+    for _ in range(repeat):
+        t = time.perf_counter()
+        for _ in range(number):
+            fn()
+        best = min(best, (time.perf_counter() - t) / number)
+    return best
+
+
+def moved(shape, v):
+    t = gp_Trsf()
+    t.SetTranslation(gp_Vec(*v))
+    return BRepBuilderAPI_Transform(shape, t, True).Shape()
+
+
+def analytic_parts():
+    box = BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape()
+    cyl = BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape()
+    sph = BRepPrimAPI_MakeSphere(1.0).Shape()
+    tor = BRepPrimAPI_MakeTorus(2.0, 0.5).Shape()
+    drilled = BRepAlgoAPI_Cut(BRepPrimAPI_MakeBox(2.0, 2.0, 2.0).Shape(), BRepPrimAPI_MakeCylinder(
+        gp_Ax2(gp_Pnt(1, 1, -1), gp_Dir(0, 0, 1)), 0.5, 4.0).Shape()).Shape()
+    return {"box": box, "cylinder": cyl, "sphere": sph, "torus": tor, "drilled box": drilled}
+
+
+def table_analytic():
+    print("\n(1) analytic parts: time per call, massprops (about a local origin, with bars) vs "
+          "plain BRepGProp")
+    print(f"{'part':>12} {'where':>10} {'plain [us]':>11} {'massprops [us]':>15} {'ratio':>6}")
+    for name, shape in analytic_parts().items():
+        for where, part in (("at origin", shape), ("1e6 away", moved(shape, (1e6, 0, 0)))):
+            t0 = best_time(lambda s=part: plain(s))
+            t1 = best_time(lambda s=part, n=name: integrate_solid(s, 1.0, n))
+            print(f"{name:>12} {where:>10} {t0 * 1e6:11.1f} {t1 * 1e6:15.1f} {t1 / t0:6.2f}")
+
+
+def table_offsets():
+    print("\n(2) cylinder r=1, h=2 moved 10^k sizes away: relative error of the largest moment")
+    v = 2 * math.pi
+    exact = v * (3 + 4) / 12
+    print(f"{'distance':>9} {'plain':>10} {'massprops':>10}")
+    base = BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape()
+    for k in (0, 2, 4, 5, 6, 7, 8):
+        d = 10.0**k
+        s = moved(base, (d, d, d))
+        j0 = plain(s)[2][0, 0]
+        j1 = integrate_solid(s, 1.0, "cyl").moments.inertia[0, 0]
+        print(f"{f'1e{k}':>9} {abs(j0 / exact - 1):10.1e} {abs(j1 / exact - 1):10.1e}")
+
+
+def table_nurbs():
+    print("\n(3) NURBS forms: time and relative error reached (volume, largest moment); "
+          "massprops: its integration bar")
+    forms = {"sphere": (BRepPrimAPI_MakeSphere(1.0).Shape(), 4 * math.pi / 3, 0.4),
+             "torus": (BRepPrimAPI_MakeTorus(2.0, 0.5).Shape(), 2 * math.pi**2 * 2 * 0.25,
+                       4 + 0.75 * 0.25)}
+    print(f"{'solid':>7} {'method':>20} {'time [ms]':>10} {'V err':>9} {'J err':>9} "
+          f"{'bar V':>9} {'bar J':>9}")
+    for name, (shape, v, jfac) in forms.items():
+        n = BRepBuilderAPI_NurbsConvert(shape, True).Shape()
+        j_exact = v * jfac
+        for eps in (None, 1e-6, 1e-9, 1e-12, 1e-14):
+            t = best_time(lambda e=eps, s=n: plain(s, e), repeat=3)
+            vol, _, j = plain(n, eps)
+            label = "plain Gauss" if eps is None else f"plain eps={eps:g}"
+            print(f"{name:>7} {label:>20} {t * 1e3:10.2f} {abs(vol / v - 1):9.1e} "
+                  f"{abs(j[2, 2] / j_exact - 1):9.1e} {'':>9} {'':>9}")
+        t = best_time(lambda s=n, k=name: integrate_solid(s, 1.0, k), repeat=3)
+        r = integrate_solid(n, 1.0, name)
+        bv, _, bj = r.integration
+        print(f"{name:>7} {'massprops':>20} {t * 1e3:10.2f} "
+              f"{abs(r.moments.volume / v - 1):9.1e} "
+              f"{abs(r.moments.inertia[2, 2] / j_exact - 1):9.1e} {bv / v:9.1e} "
+              f"{bj[2, 2] / j_exact:9.1e}")
+
+
+def plate_with_holes(n=16, pitch=100.0, radius=20.0, thick=20.0, fillet=3.0):
+    """n x n through holes in a plate (mm), both rims of each hole filleted."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+    from OCP.GeomAbs import GeomAbs_Circle
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS, TopoDS_Compound
+
+    side = n * pitch
+    plate = BRepPrimAPI_MakeBox(side, side, thick).Shape()
+    builder = BRep_Builder()
+    tools = TopoDS_Compound()
+    builder.MakeCompound(tools)
+    for i in range(n):
+        for j in range(n):
+            axis = gp_Ax2(gp_Pnt(pitch * (i + 0.5), pitch * (j + 0.5), -1.0), gp_Dir(0, 0, 1))
+            builder.Add(tools, BRepPrimAPI_MakeCylinder(axis, radius, thick + 2).Shape())
+    cut = BRepAlgoAPI_Cut(plate, tools).Shape()
+    fil = BRepFilletAPI_MakeFillet(cut)
+    explorer = TopExp_Explorer(cut, TopAbs_EDGE)
+    while explorer.More():
+        edge = TopoDS.Edge(explorer.Current())
+        if BRepAdaptor_Curve(edge).GetType() == GeomAbs_Circle:
+            fil.Add(fillet, edge)
+        explorer.Next()
+    return fil.Shape()
+
+
+def table_plate():
+    print("\n(4) a real-sized part: plate 1.6 m x 1.6 m x 20 mm, 256 filleted holes, "
+          "from STEP (mm)")
+    t = time.perf_counter()
+    shape = plate_with_holes()
+    build = time.perf_counter() - t
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "plate.step")
+        writer = STEPControl_Writer()
+        Interface_Static.SetCVal_s("write.step.unit", "MM")
+        writer.Transfer(shape, STEPControl_AsIs)
+        writer.Write(path)
+
+        def peer():
+            reader = STEPControl_Reader()
+            reader.ReadFile(path)
+            reader.TransferRoots()
+            return plain(reader.OneShape())
+
+        def ours():
+            return inspect_cad(path)
+
+        result = ours()
+        faces = sum(result.solids[0].integral.faces.values())
+        t0 = best_time(peer, repeat=3, number=1)
+        t1 = best_time(ours, repeat=3, number=1)
+    print(f"  built in {build:.1f} s; {faces} faces "
+          f"({result.solids[0].integral.faces})")
+    print(f"  plain read + BRepGProp {t0 * 1e3:8.1f} ms   massprops inspect_cad "
+          f"{t1 * 1e3:8.1f} ms   ratio {t1 / t0:.2f}")
+
+
+def main():
+    table_analytic()
+    table_offsets()
+    table_nurbs()
+    table_plate()
+
+
+if __name__ == "__main__":
+    main()

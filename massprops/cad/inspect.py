@@ -1,0 +1,267 @@
+"""A CAD file to per-solid mass properties (with densities by name) and the assembly's total."""
+
+from __future__ import annotations
+
+import fnmatch
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from massprops.cad.integrate import SolidIntegral, integrate_solid
+from massprops.cad.read import CadFile, CadSolid, read_cad
+from massprops.errors import MeshTopologyError, SceneError, UsageError
+from massprops.inertia import parallel_axis, principal_axes, rotate_inertia
+from massprops.mesh.facesums import U
+from massprops.mesh.integral import (
+    ErrorBars,
+    MassProperties,
+    Uncertainty,
+    check_density_mass,
+    properties_from_moments,
+)
+
+__all__ = ["CadInspection", "SolidResult", "inspect_cad", "load_density_map"]
+
+
+@dataclass(frozen=True, eq=False)
+class SolidResult:
+    """One solid: its name, assembly path, placement (4, 4; translation in m), the integral
+    (unit density, SI), the mass properties at its density (file frame, about its COM),
+    the integration and input bars at that density (None where not applicable), warnings."""
+
+    solid: CadSolid
+    placement: np.ndarray
+    integral: SolidIntegral
+    properties: MassProperties
+    integration: Uncertainty | None
+    input: Uncertainty | None
+    warnings: tuple[str, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class CadInspection:
+    """What `massprops inspect` reports for a CAD file: ``solids`` in file order and, with
+    more than one, ``total`` (the whole about its COM by parallel axes, file frame)."""
+
+    file: CadFile
+    solids: tuple[SolidResult, ...]
+    total: tuple[MassProperties, Uncertainty | None, Uncertainty | None] | None
+    warnings: tuple[str, ...]
+
+    def as_dicts(self) -> list[dict]:
+        """The contract's JSON objects: one per solid, then the total (several solids)."""
+        f = self.file
+        out = []
+        for r in self.solids:
+            d = {"file": f.name, "solid": r.solid.name, "path": r.solid.path}
+            d.update(r.properties.as_dict())
+            d["uncertainty"] = _bars(r.properties, r.integration, r.input)
+            cad = {"format": f.format, "unit": f.unit, "faces": dict(r.integral.faces),
+                   "tolerance": r.integral.tolerance}
+            if r.solid.colour is not None:
+                cad["colour"] = list(r.solid.colour)
+            d["cad"] = cad
+            d["placement"] = r.placement.tolist()
+            d["warnings"] = list(r.warnings)
+            out.append(d)
+        if self.total is not None:
+            props, integration, data = self.total
+            d = {"file": f.name, "solid": "total", "path": "", "total": True}
+            d.update(props.as_dict())
+            d["uncertainty"] = _bars(props, integration, data)
+            d["warnings"] = list(self.warnings)
+            out.append(d)
+        elif out:
+            out[-1]["warnings"] = list(out[-1]["warnings"]) + list(self.warnings)
+        return out
+
+
+def _bars(props: MassProperties, integration: Uncertainty | None,
+          data: Uncertainty | None) -> dict:
+    return {"rounding": props.uncertainty.rounding.as_dict(),
+            "integration": None if integration is None else integration.as_dict(),
+            "input": None if data is None else data.as_dict()}
+
+
+def load_density_map(path: str | os.PathLike) -> list[tuple[str, float]]:
+    """A flat YAML mapping of solid names or glob patterns to kg/m³, in file order."""
+    import yaml  # a core dependency, only needed with --density-map
+
+    name = os.fspath(path)
+    try:
+        with open(name, encoding="utf-8") as fh:
+            data = yaml.safe_load(fh)
+    except OSError as exc:
+        raise SceneError(f"{name}: cannot read the density map ({exc.strerror}); check the "
+                         "path") from exc
+    except yaml.YAMLError as exc:
+        raise SceneError(f"{name}: not valid YAML ({exc}); expected 'name: density' lines") \
+            from exc
+    if not isinstance(data, dict):
+        raise SceneError(f"{name}: expected a mapping of solid names or glob patterns to "
+                         "densities in kg/m³, got " + type(data).__name__)
+    out = []
+    for key, value in data.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+                np.isfinite(value) and value > 0):
+            raise SceneError(f"{name}: {key}: expected a positive density in kg/m³, got "
+                             f"{value!r}")
+        out.append((str(key), float(value)))
+    return out
+
+
+def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
+                mass: float | None = None, unit: str | None = None,
+                density_map: list[tuple[str, float]] | None = None,
+                allow_open: bool = False) -> CadInspection:
+    """Read a CAD file and integrate every solid (see `massprops.cad.integrate`).
+
+    density : kg/m³ for solids the map does not name (default 1). mass : kg, the TOTAL mass;
+    the density (uniform) follows from the total volume; not with a density or a map.
+    unit : BREP's unit (default m); for STEP/IGES only the file's own (else UsageError).
+    Raises MeshTopologyError for an open shell (unless allow_open).
+    """
+    check_density_mass(density, mass)
+    if mass is not None and density_map:
+        raise UsageError("give --mass or --density-map, not both (a total mass fixes one "
+                         "uniform density)")
+    cad = read_cad(path, unit=unit)
+    if not cad.solids:
+        raise MeshTopologyError(f"{cad.name}: holds no solid; check that the file has 3D "
+                                "geometry (not only curves or points)")
+    integrals = []
+    for solid in cad.solids:
+        if not solid.closed and not allow_open:
+            raise MeshTopologyError(
+                f"{cad.name}: {solid.path} is an open shell, not a closed solid: its volume "
+                "is undefined; close it in the CAD tool, or pass --allow-open")
+        integrals.append(integrate_solid(solid.shape, cad.scale, f"{cad.name}: {solid.path}",
+                                         only_closed=solid.closed))
+    densities, warnings = _densities(cad, density_map or [], density)
+    if mass is not None:
+        total_volume = sum(i.moments.volume for i in integrals)
+        densities = [mass / total_volume] * len(integrals)
+    results = []
+    for solid, integral, rho in zip(cad.solids, integrals, densities):
+        props = properties_from_moments(integral.origin, integral.moments, density=rho,
+                                        mass=None)
+        notes = [] if solid.closed else [
+            "open shell integrated as if closed (--allow-open): the volume depends on where "
+            "the origin is and is not a property of the part"]
+        if integral.valid is False:
+            notes.append("not a valid shape (OpenCASCADE's BRepCheck): the integral and its "
+                         "bars describe the surfaces as stored, which may not bound the "
+                         "intended solid; repair or re-export it from the CAD tool")
+        placement = solid.placement.copy()
+        placement[:3, 3] *= cad.scale
+        results.append(SolidResult(solid, placement, integral, props,
+                                   _integration(integral, props),
+                                   _input(integral, props, cad), tuple(notes)))
+    total = _total(results) if len(results) > 1 else None
+    return CadInspection(cad, tuple(results), total, tuple(warnings))
+
+
+def _densities(cad: CadFile, density_map: list[tuple[str, float]], default: float | None
+               ) -> tuple[list[float], list[str]]:
+    """Per solid: the first pattern in map order matching its name or path, else ``default``."""
+    used = [False] * len(density_map)
+    out = []
+    for solid in cad.solids:
+        rho = 1.0 if default is None else default
+        for k, (pattern, value) in enumerate(density_map):
+            if any(fnmatch.fnmatchcase(s, pattern) for s in (solid.name, solid.path)):
+                rho, used[k] = value, True
+                break
+        out.append(rho)
+    warnings = [f"--density-map: pattern {p!r} matches no solid (names: "
+                f"{', '.join(s.name for s in cad.solids)})"
+                for (p, _), hit in zip(density_map, used) if not hit]
+    return out, warnings
+
+
+def _integration(integral: SolidIntegral, props: MassProperties) -> Uncertainty | None:
+    if integral.integration is None:
+        return None
+    dv, dc, dj = integral.integration
+    rho = props.density
+    dj = rho * dj
+    return Uncertainty(dv, rho * dv, dc, dj, np.full(3, np.linalg.norm(dj, 2)))
+
+
+def _input(integral: SolidIntegral, props: MassProperties, cad: CadFile) -> Uncertainty | None:
+    """First order: every surface point may lie anywhere within the modelling tolerance τ
+    (plus 2 ulps of the largest coordinate, plus half the last printed digit for IGES), so ∫g dV
+    moves by at most max|g| τ A
+    (the mesh ``input`` bar's argument with η = τ in every direction)."""
+    far = float(np.max(np.abs(integral.origin) + integral.reach))
+    # float64 itself: far from the origin every stored point and pole is rounded to half an
+    # ulp of its coordinates (a NURBS torus 1e10 sizes out is 7e-7 off in volume: its poles
+    # moved independently); 2 ulps leave margin for the poles' weights
+    tau = integral.tolerance + 2 * float(np.spacing(far))
+    if cad.digits is not None:
+        tau += far * 0.5 * 10.0 ** (1 - cad.digits)
+    if tau == 0:
+        return None
+    flux = 1.01 * tau * integral.area
+    reach = integral.reach * 2   # from the COM to the farthest box corner, per axis
+    g = np.outer(reach, reach)
+    g[np.diag_indices(3)] = np.roll(reach**2, 1) + np.roll(reach**2, 2)
+    rho = props.density
+    d_inertia = rho * g * flux
+    volume = props.volume
+    return Uncertainty(flux, rho * flux, reach * flux / volume, d_inertia,
+                       np.full(3, np.linalg.norm(d_inertia, 2)))
+
+
+def _total(results: list[SolidResult]
+           ) -> tuple[MassProperties, Uncertainty | None, Uncertainty | None]:
+    """The whole by parallel axes: M = Σm, c = Σ m c_i / M, J = Σ [J_i + m_i (|d|² I - d dᵀ)],
+    d = c_i - c; each bar summed the same way (first order, plus the shift's rounding)."""
+    masses = np.array([r.properties.mass for r in results])
+    total = float(np.sum(masses))
+    coms = np.array([r.properties.center_of_mass for r in results])
+    # about the first solid's COM, so that far-away assemblies lose nothing to the offset
+    base = coms[0]
+    com = base + (masses[:, None] * (coms - base)).sum(axis=0) / total
+    inertia = np.zeros((3, 3))
+    for r, m, c in zip(results, masses, coms):
+        inertia += parallel_axis(r.properties.inertia, m, c - com)
+    moments, axes = principal_axes(inertia)
+    span = np.max(np.abs(coms - com), axis=0)
+
+    def summed(pick) -> Uncertainty | None:
+        bars = [pick(r) for r in results]
+        if all(b is None for b in bars):
+            return None
+        zero = Uncertainty(0.0, 0.0, np.zeros(3), np.zeros((3, 3)), np.zeros(3))
+        bars = [zero if b is None else b for b in bars]
+        dm = sum(b.mass for b in bars)
+        dc = sum(m * b.center_of_mass + b.mass * span for b, m in zip(bars, masses)) / total
+        shift = np.outer(span + dc, dc)
+        dj = sum(b.inertia for b in bars) + np.outer(span, span) * 4 * dm + \
+            4 * total * (shift + shift.T)
+        return Uncertainty(sum(b.volume for b in bars), dm, dc, dj,
+                           np.full(3, np.linalg.norm(dj, 2)))
+
+    rounding = summed(lambda r: r.properties.uncertainty.rounding)
+    extra = 8 * U * (np.abs(inertia) + total * np.outer(span, span))
+    rounding = Uncertainty(rounding.volume, rounding.mass + 4 * U * total,
+                           rounding.center_of_mass + 4 * U * (np.abs(com) + span),
+                           rounding.inertia + extra,
+                           rounding.principal_moments + np.linalg.norm(extra, 2)
+                           + 32 * U * np.abs(moments).max())
+    volume = float(sum(r.properties.volume for r in results))
+
+    props = MassProperties(volume, total, total / volume, com, inertia, moments, axes,
+                           ErrorBars(rounding))
+    return props, summed(lambda r: r.integration), summed(lambda r: r.input)
+
+
+def local_inertial(result: SolidResult) -> tuple[np.ndarray, np.ndarray]:
+    """(COM (3,), inertia (3, 3)) in the solid's own frame from the file (its placement
+    undone): what a robot description's <inertial> holds for that link."""
+    r = result.placement[:3, :3]
+    t = result.placement[:3, 3]
+    com = r.T @ (result.properties.center_of_mass - t)
+    return com, rotate_inertia(result.properties.inertia, r.T)

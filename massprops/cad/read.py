@@ -1,0 +1,302 @@
+"""CAD files to solids: names, assembly paths, placements and the file's length unit.
+
+STEP and IGES go through OpenCASCADE's XCAF readers (product names, assembly structure,
+colours); BREP files hold one shape and no unit (``unit`` says it, default metres). The geometry
+is kept in the FILE's unit (the translator's conversion to millimetres is switched off while
+reading): scaling far-away coordinates before integrating would round them (1e-8 at 1e8 sizes);
+the integral converts its results instead.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from massprops.cad.occ import quiet_stdout, require_occ
+from massprops.errors import MeshFileError, MeshFormatError, UnknownFormatError, UsageError
+
+__all__ = ["CadFile", "CadSolid", "UNIT_METRES", "read_cad"]
+
+UNIT_METRES = {"m": 1.0, "cm": 0.01, "mm": 0.001, "um": 1e-6, "in": 0.0254, "ft": 0.3048}
+"""The --unit choices (as for meshes), in metres."""
+
+# STEP/IGES unit names as OpenCASCADE reports them -> (our unit, the translator's name for it)
+_FILE_UNITS = {"metre": ("m", "M"), "meter": ("m", "M"), "m": ("m", "M"),
+               "millimetre": ("mm", "MM"), "millimeter": ("mm", "MM"), "mm": ("mm", "MM"),
+               "centimetre": ("cm", "CM"), "centimeter": ("cm", "CM"), "cm": ("cm", "CM"),
+               "micrometre": ("um", "UM"), "micrometer": ("um", "UM"), "um": ("um", "UM"),
+               "micron": ("um", "UM"), "inch": ("in", "INCH"), "in": ("in", "INCH"),
+               "foot": ("ft", "FT"), "ft": ("ft", "FT")}
+
+
+@dataclass(frozen=True, eq=False)
+class CadSolid:
+    """One solid (or, with allow_open, an open shell) of a CAD file.
+
+    name : product name from the file, else ``solid1``, ``solid2``, ... in file order.
+    path : its place in the assembly, names joined by '/'.
+    shape : the OpenCASCADE TopoDS_Shape, placed in the file's (assembly) frame, file unit.
+    placement : (4, 4) float64, the instance's placement (file frame <- the part's own frame),
+        translation in the file unit.
+    closed : False for a shell or face set that bounds no solid.
+    colour : (r, g, b) in 0..1 when the file gives one, else None.
+    """
+
+    name: str
+    path: str
+    shape: Any
+    placement: np.ndarray
+    closed: bool
+    colour: tuple[float, float, float] | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class CadFile:
+    """format : "step" | "iges" | "brep". unit : the file's length unit (a UNIT_METRES key).
+    scale : metres per file unit. solids : in file order. digits : significant digits the file's
+    numbers carry when the format limits them (IGES writers: 10), else None."""
+
+    name: str
+    format: str
+    unit: str
+    scale: float
+    solids: tuple[CadSolid, ...]
+    digits: int | None = None
+
+
+def read_cad(path: str | os.PathLike, *, unit: str | None = None) -> CadFile:
+    """Read a STEP (.step/.stp), IGES (.iges/.igs) or BREP (.brep) file.
+
+    unit : for BREP, the file's unit (default "m"); for STEP/IGES, None or the file's own unit
+        (a different one is a UsageError: the file says what its numbers mean).
+    Raises CadExtraMissingError (no OpenCASCADE), MeshFileError, MeshFormatError.
+    """
+    name = os.fspath(path)
+    ext = os.path.splitext(name)[1].lower()
+    fmt = {".step": "step", ".stp": "step", ".iges": "iges", ".igs": "iges",
+           ".brep": "brep"}.get(ext)
+    if fmt is None:
+        raise UnknownFormatError(f"{name}: not a CAD file extension ({ext!r}); expected .step, "
+                                 ".stp, .iges, .igs or .brep")
+    if not os.path.isfile(name):
+        raise MeshFileError(f"{name}: no such file; check the path")
+    if unit is not None and unit not in UNIT_METRES:
+        raise UsageError(f"{name}: unknown unit {unit!r}; expected one of {sorted(UNIT_METRES)}")
+    require_occ(name)
+    if fmt == "brep":
+        return _read_brep(name, unit or "m")
+    return _read_xcaf(name, fmt, unit)
+
+
+def _read_brep(name: str, unit: str) -> CadFile:
+    # optional extra: OCP is imported only once a CAD file is read
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepTools import BRepTools
+    from OCP.TopoDS import TopoDS_Shape
+
+    shape = TopoDS_Shape()
+    try:
+        with quiet_stdout():
+            ok = BRepTools.Read_s(shape, name, BRep_Builder())
+    except Exception as exc:  # the binding raises its own types on a malformed file
+        raise MeshFormatError(f"{name}: not a readable BREP file ({exc}); check the file") from exc
+    if not ok or shape.IsNull():
+        raise MeshFormatError(f"{name}: not a readable BREP file; check that it was written by "
+                              "BRepTools (OpenCASCADE's native format)")
+    solids = _split(shape, "", "", np.eye(4), None, [0])
+    return CadFile(name, "brep", unit, UNIT_METRES[unit], tuple(solids))
+
+
+def _read_xcaf(name: str, fmt: str, unit: str | None) -> CadFile:
+    # optional extra: OCP is imported only once a CAD file is read
+    from OCP.collections import Sequence_TDF_Label as TDF_LabelSequence
+    from OCP.Interface import Interface_Static
+    from OCP.TCollection import TCollection_ExtendedString
+    from OCP.TDocStd import TDocStd_Document
+    from OCP.XCAFDoc import XCAFDoc_DocumentTool
+
+    file_unit, occ_unit = _file_unit(name, fmt)
+    if unit is not None and unit != file_unit:
+        raise UsageError(f"{name}: --unit {unit} disagrees with the file's own unit "
+                         f"({file_unit}); drop --unit (the file says what its numbers mean)")
+    previous = Interface_Static.CVal_s("xstep.cascade.unit")
+    Interface_Static.SetCVal_s("xstep.cascade.unit", occ_unit)  # keep the file's numbers
+    try:
+        doc = TDocStd_Document(TCollection_ExtendedString("massprops"))
+        # the document's own length unit, else XCAF rescales to millimetres
+        XCAFDoc_DocumentTool.SetLengthUnit_s(doc, UNIT_METRES[file_unit])
+        reader = _xcaf_reader(fmt)
+        with quiet_stdout():
+            status = reader.ReadFile(name)
+            done = int(status) == 1 and reader.Transfer(doc)  # 1: IFSelect_RetDone
+        if not done:
+            raise MeshFormatError(f"{name}: not a readable {fmt.upper()} file (translator status "
+                                  f"{status}); check that the file is complete")
+    finally:
+        Interface_Static.SetCVal_s("xstep.cascade.unit", previous)
+    tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    colours = XCAFDoc_DocumentTool.ColorTool_s(doc.Main())
+    roots = TDF_LabelSequence()
+    tool.GetFreeShapes(roots)
+    solids: list[CadSolid] = []
+    counter = [0]
+    for i in range(1, roots.Length() + 1):
+        _walk(tool, colours, roots.Value(i), None, "", name, solids, counter)
+    return CadFile(name, fmt, file_unit, UNIT_METRES[file_unit], tuple(solids),
+                   10 if fmt == "iges" else None)
+
+
+def _xcaf_reader(fmt: str) -> Any:
+    if fmt == "step":
+        from OCP.STEPCAFControl import STEPCAFControl_Reader  # optional extra
+
+        reader = STEPCAFControl_Reader()
+    else:
+        from OCP.IGESCAFControl import IGESCAFControl_Reader  # optional extra
+
+        reader = IGESCAFControl_Reader()
+    reader.SetNameMode(True)
+    reader.SetColorMode(True)
+    return reader
+
+
+def _file_unit(name: str, fmt: str) -> tuple[str, str]:
+    """(our unit name, the translator's name) of the file's length unit (first one given)."""
+    if fmt == "step":
+        from OCP.collections import Sequence_TCollection_AsciiString as Names  # optional extra
+        from OCP.STEPControl import STEPControl_Reader
+
+        reader = STEPControl_Reader()
+        if int(reader.ReadFile(name)) != 1:
+            raise MeshFormatError(f"{name}: not a readable STEP file; check that the file is "
+                                  "complete (ISO-10303-21 text)")
+        lengths, angles, solid_angles = Names(), Names(), Names()
+        reader.FileUnits(lengths, angles, solid_angles)
+        found = [lengths.Value(i).ToCString().lower() for i in range(1, lengths.Length() + 1)]
+    else:
+        from OCP.IGESControl import IGESControl_Reader  # optional extra
+
+        reader = IGESControl_Reader()
+        if int(reader.ReadFile(name)) != 1:
+            raise MeshFormatError(f"{name}: not a readable IGES file; check that the file is "
+                                  "complete")
+        unit_name = reader.IGESModel().GlobalSection().UnitName()
+        if unit_name is None or reader.IGESModel().NbEntities() == 0:
+            raise MeshFormatError(f"{name}: not a readable IGES file (no global section or no "
+                                  "entities); check that the file is complete")
+        found = [unit_name.ToCString().lower()]
+    for text in found:
+        key = text.strip().strip("'").split()[0] if text.strip() else ""
+        if key in _FILE_UNITS:
+            return _FILE_UNITS[key]
+    if not found or not found[0]:
+        return "mm", "MM"  # STEP/IGES default when a file names none
+    raise MeshFormatError(f"{name}: unsupported length unit {found[0]!r}; expected metres, "
+                          "millimetres, centimetres, micrometres, inches or feet")
+
+
+def _label_name(label: Any) -> str:
+    from OCP.TDataStd import TDataStd_Name  # optional extra
+
+    attr = TDataStd_Name()
+    if label.FindAttribute(TDataStd_Name.GetID_s(), attr):
+        return attr.Get().ToExtString()
+    return ""
+
+
+def _colour(colours: Any, label: Any) -> tuple[float, float, float] | None:
+    from OCP.Quantity import Quantity_Color  # optional extra
+    from OCP.XCAFDoc import XCAFDoc_ColorTool, XCAFDoc_ColorType
+
+    colour = Quantity_Color()
+    for kind in (XCAFDoc_ColorType.XCAFDoc_ColorSurf, XCAFDoc_ColorType.XCAFDoc_ColorGen):
+        if XCAFDoc_ColorTool.GetColor_s(label, kind, colour):
+            return (colour.Red(), colour.Green(), colour.Blue())
+    return None
+
+
+def _walk(tool: Any, colours: Any, label: Any, location: Any, prefix: str, file: str,
+          out: list[CadSolid], counter: list[int]) -> None:
+    """Depth first through the assembly: components carry their placement down."""
+    from OCP.collections import Sequence_TDF_Label as TDF_LabelSequence  # optional extra
+    from OCP.TDF import TDF_Label
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.XCAFDoc import XCAFDoc_ShapeTool
+
+    location = TopLoc_Location() if location is None else location
+    name = _label_name(label)
+    if XCAFDoc_ShapeTool.IsAssembly_s(label):
+        components = TDF_LabelSequence()
+        XCAFDoc_ShapeTool.GetComponents_s(label, components, False)
+        here = f"{prefix}{name or 'assembly'}/"
+        for i in range(1, components.Length() + 1):
+            component = components.Value(i)
+            referred = TDF_Label()
+            XCAFDoc_ShapeTool.GetReferredShape_s(component, referred)
+            placed = location.Multiplied(XCAFDoc_ShapeTool.GetLocation_s(component))
+            _walk(tool, colours, referred, placed, here, file, out, counter)
+        return
+    shape = XCAFDoc_ShapeTool.GetShape_s(label)
+    if shape.IsNull():
+        return
+    matrix = _matrix(location)
+    placed = shape if location.IsIdentity() else shape.Moved(location)
+    out.extend(_split(placed, prefix, name, matrix, _colour(colours, label), counter))
+
+
+def _split(shape: Any, prefix: str, name: str, matrix: np.ndarray,
+           colour: tuple[float, float, float] | None, counter: list[int]) -> list[CadSolid]:
+    """The solids of one part, then its shells and faces that belong to no solid (open)."""
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID  # optional extra
+    from OCP.TopExp import TopExp_Explorer
+
+    pieces: list[tuple[Any, bool]] = []
+    explorer = TopExp_Explorer(shape, TopAbs_SOLID)
+    while explorer.More():
+        pieces.append((explorer.Current(), True))
+        explorer.Next()
+    explorer = TopExp_Explorer(shape, TopAbs_SHELL, TopAbs_SOLID)
+    while explorer.More():
+        pieces.append((explorer.Current(), False))
+        explorer.Next()
+    explorer = TopExp_Explorer(shape, TopAbs_FACE, TopAbs_SHELL)
+    while explorer.More():
+        pieces.append((explorer.Current(), False))
+        explorer.Next()
+    out = []
+    for k, (piece, is_solid) in enumerate(pieces):
+        counter[0] += 1
+        base = name or f"solid{counter[0]}"
+        label = base if len(pieces) == 1 else f"{base}.{k + 1}"
+        closed = is_solid and _closed(piece)
+        out.append(CadSolid(label, prefix + label, piece, matrix, closed, colour))
+    return out
+
+
+def _closed(solid: Any) -> bool:
+    """Every shell of the solid closed (each edge shared by two faces)."""
+    from OCP.BRep import BRep_Tool  # optional extra
+    from OCP.TopAbs import TopAbs_SHELL
+    from OCP.TopExp import TopExp_Explorer
+
+    explorer = TopExp_Explorer(solid, TopAbs_SHELL)
+    found = False
+    while explorer.More():
+        found = True
+        if not BRep_Tool.IsClosed_s(explorer.Current()):
+            return False
+        explorer.Next()
+    return found
+
+
+def _matrix(location: Any) -> np.ndarray:
+    """(4, 4) of a TopLoc_Location (translation in the file unit; the caller scales it)."""
+    trsf = location.Transformation()
+    out = np.eye(4)
+    for i in range(3):
+        for j in range(4):
+            out[i, j] = trsf.Value(i + 1, j + 1)
+    return out

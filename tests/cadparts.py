@@ -1,0 +1,183 @@
+"""Solids and files for the CAD tests, made with the same kernel (OpenCASCADE via OCP).
+
+Imported only by tests that first did ``pytest.importorskip("OCP")``."""
+
+from __future__ import annotations
+
+import math
+
+from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert, BRepBuilderAPI_Transform
+from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
+from OCP.BRepPrimAPI import (
+    BRepPrimAPI_MakeBox,
+    BRepPrimAPI_MakeCone,
+    BRepPrimAPI_MakeCylinder,
+    BRepPrimAPI_MakeSphere,
+    BRepPrimAPI_MakeTorus,
+)
+from OCP.BRepTools import BRepTools
+from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec
+from OCP.Interface import Interface_Static
+from OCP.STEPCAFControl import STEPCAFControl_Writer
+from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+from OCP.TCollection import TCollection_ExtendedString
+from OCP.TDataStd import TDataStd_Name
+from OCP.TDocStd import TDocStd_Document
+from OCP.TopAbs import TopAbs_EDGE
+from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopLoc import TopLoc_Location
+from OCP.XCAFDoc import XCAFDoc_DocumentTool
+
+import massprops.cad.occ as occ
+
+occ.require_occ("tests")  # silence the translators' console output
+
+
+def closed_forms(kind: str, a: float) -> tuple[float, tuple, tuple]:
+    """(volume, COM relative to the solid's anchor, diagonal inertia per unit density about the
+    COM) of the analytic solids below, size a."""
+    pi = math.pi
+    if kind == "box":           # a x 2a x 3a from the anchor
+        x, y, z = a, 2 * a, 3 * a
+        v = x * y * z
+        return v, (x / 2, y / 2, z / 2), (v * (y * y + z * z) / 12, v * (x * x + z * z) / 12,
+                                         v * (x * x + y * y) / 12)
+    if kind == "cylinder":      # radius a, height 2a along z
+        r, h = a, 2 * a
+        v = pi * r * r * h
+        side = v * (3 * r * r + h * h) / 12
+        return v, (0, 0, h / 2), (side, side, v * r * r / 2)
+    if kind == "sphere":
+        v = 4 * pi * a**3 / 3
+        return v, (0, 0, 0), (0.4 * v * a * a,) * 3
+    if kind == "torus":         # major 2a, minor a/2, axis z
+        big, r = 2 * a, a / 2
+        v = 2 * pi * pi * big * r * r
+        izz = v * (big * big + 0.75 * r * r)
+        ixx = v * (big * big / 2 + 5 * r * r / 8)
+        return v, (0, 0, 0), (ixx, ixx, izz)
+    if kind == "cone":          # base radius a at z=0, apex at z=2a
+        r, h = a, 2 * a
+        v = pi * r * r * h / 3
+        ixx = v * (3 * r * r / 20 + 3 * h * h / 80)
+        return v, (0, 0, h / 4), (ixx, ixx, 0.3 * v * r * r)
+    raise ValueError(kind)
+
+
+def make(kind: str, a: float, at: tuple = (0.0, 0.0, 0.0)):
+    """An analytic solid of size a with its anchor at ``at``."""
+    ax = gp_Ax2(gp_Pnt(*at), gp_Dir(0, 0, 1))
+    if kind == "box":
+        return BRepPrimAPI_MakeBox(gp_Pnt(*at), a, 2 * a, 3 * a).Shape()
+    if kind == "cylinder":
+        return BRepPrimAPI_MakeCylinder(ax, a, 2 * a).Shape()
+    if kind == "sphere":
+        return BRepPrimAPI_MakeSphere(gp_Pnt(*at), a).Shape()
+    if kind == "torus":
+        return BRepPrimAPI_MakeTorus(ax, 2 * a, a / 2).Shape()
+    if kind == "cone":
+        return BRepPrimAPI_MakeCone(ax, a, 0.0, 2 * a).Shape()
+    raise ValueError(kind)
+
+
+def drilled_box(a: float, at: tuple = (0.0, 0.0, 0.0)):
+    """Cube of side 2a, a through hole of radius a/2 along z through its centre."""
+    x, y, z = at
+    cube = BRepPrimAPI_MakeBox(gp_Pnt(x, y, z), 2 * a, 2 * a, 2 * a).Shape()
+    hole = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(x + a, y + a, z - a), gp_Dir(0, 0, 1)),
+                                    a / 2, 4 * a).Shape()
+    return BRepAlgoAPI_Cut(cube, hole).Shape()
+
+
+def filleted_box(a: float, r: float, at: tuple = (0.0, 0.0, 0.0)):
+    """Cube of side 2a with its four edges parallel to z rounded with radius r."""
+    x, y, z = at
+    cube = BRepPrimAPI_MakeBox(gp_Pnt(x, y, z), 2 * a, 2 * a, 2 * a).Shape()
+    fillet = BRepFilletAPI_MakeFillet(cube)
+    explorer = TopExp_Explorer(cube, TopAbs_EDGE)
+    seen = set()
+    from OCP.BRep import BRep_Tool
+    from OCP.TopoDS import TopoDS
+    while explorer.More():
+        edge = TopoDS.Edge(explorer.Current())
+        p = BRep_Tool.Pnt_s(TopExp.FirstVertex_s(edge))
+        q = BRep_Tool.Pnt_s(TopExp.LastVertex_s(edge))
+        key = (round(p.X(), 9), round(p.Y(), 9))
+        if abs(p.X() - q.X()) < 1e-12 * a and abs(p.Y() - q.Y()) < 1e-12 * a and key not in seen:
+            seen.add(key)
+            fillet.Add(r, edge)
+        explorer.Next()
+    return fillet.Shape()
+
+
+def filleted_box_forms(a: float, r: float) -> tuple[float, tuple]:
+    """(volume, diagonal inertia per unit density about the centre) of filleted_box."""
+    s = 2 * a
+    h = s
+    # square of side s minus four corner pieces (square r x r minus quarter disc)
+    corner_area = r * r * (1 - math.pi / 4)
+    area = s * s - 4 * corner_area
+    # polar second moment of a corner piece about the square's centre
+    c = a - r   # centre of the quarter disc, from the square centre, per axis
+    # square r x r with centre at (c + r/2, c + r/2): Ixx-type (integral y²) about origin
+    sq_y2 = r * r * (r * r / 12 + (c + r / 2) ** 2)
+    # quarter disc centred at (c, c) in the outer quadrant: ∫y² = ∫(c + v)² over v in quarter
+    q_area = math.pi * r * r / 4
+    q_v = 4 * r / (3 * math.pi) * q_area    # ∫v dA
+    q_v2 = math.pi * r**4 / 16              # ∫v² dA
+    disc_y2 = c * c * q_area + 2 * c * q_v + q_v2
+    y2 = s**4 / 12 - 4 * (sq_y2 - disc_y2)  # ∫y² over the section (= ∫x²)
+    v = area * h
+    ixx = h * y2 + area * h**3 / 12
+    izz = 2 * h * y2
+    return v, (ixx, ixx, izz)
+
+
+def nurbs(shape):
+    return BRepBuilderAPI_NurbsConvert(shape, True).Shape()
+
+
+def moved(shape, offset):
+    trsf = gp_Trsf()
+    trsf.SetTranslation(gp_Vec(*offset))
+    return BRepBuilderAPI_Transform(shape, trsf, True).Shape()
+
+
+def write_step(shape, path, unit: str = "M") -> None:
+    """One shape to STEP; coordinates are taken as ``unit`` (no scaling)."""
+    writer = STEPControl_Writer()   # first: creating it initialises the parameters below
+    for key in ("write.step.unit", "xstep.cascade.unit"):
+        assert Interface_Static.SetCVal_s(key, unit)
+    try:
+        writer.Transfer(shape, STEPControl_AsIs)
+        assert int(writer.Write(str(path))) == 1
+    finally:
+        Interface_Static.SetCVal_s("xstep.cascade.unit", "MM")
+
+
+def write_brep(shape, path) -> None:
+    assert BRepTools.Write_s(shape, str(path))
+
+
+def write_assembly(parts, path, name: str = "assembly") -> None:
+    """parts: [(name, shape, (dx, dy, dz))] in millimetres -> a STEP assembly in mm whose
+    components are placed by translations."""
+    doc = TDocStd_Document(TCollection_ExtendedString("test"))
+    XCAFDoc_DocumentTool.SetLengthUnit_s(doc, 0.001)
+    tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    top = tool.NewShape()
+    TDataStd_Name.Set_s(top, TCollection_ExtendedString(name))
+    for part_name, shape, offset in parts:
+        label = tool.AddShape(shape, False)
+        TDataStd_Name.Set_s(label, TCollection_ExtendedString(part_name))
+        trsf = gp_Trsf()
+        trsf.SetTranslation(gp_Vec(*offset))
+        tool.AddComponent(top, label, TopLoc_Location(trsf))
+    tool.UpdateAssemblies()
+    writer = STEPCAFControl_Writer()
+    for key in ("write.step.unit", "xstep.cascade.unit"):
+        Interface_Static.SetCVal_s(key, "MM")
+    writer.SetNameMode(True)
+    assert writer.Transfer(doc, STEPControl_AsIs)
+    assert int(writer.Write(str(path))) == 1
