@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -109,6 +109,14 @@ class ModelReport:
 
         edits = [(r.link.node, r.link.inertial_node, r.computed) for r in self.links
                  if r.computed is not None]
+        elsewhere = [r.name for r in self.links if r.computed is not None
+                     and r.link.node.file is not None
+                     and r.link.node.file.resolve() != self.model.path.resolve()]
+        if elsewhere:
+            raise UsageError(f"{self.name}: --write edits this file only, but link(s) "
+                             f"{', '.join(elsewhere[:3])} come from an included or attached "
+                             "file; write the inertials there by hand or save the compiled "
+                             "model (mujoco.mj_saveLastXML) first")
         data = edited_bytes(self.model.data, self.model.format, edits)
         write_description(data, out, source=self.model.path, force=force)
         return len(edits)
@@ -153,8 +161,14 @@ def analyze_model(path: str | os.PathLike, *, source: str = "collision",
         raise UsageError(f"density must be a positive finite number, got {density!r}")
     model = load_model(path, source=source, package_paths=package_paths)
     meshes = MeshCache(allow_open=allow_open)
-    reports = tuple(_link(link, model, meshes, density) for link in model.links)
-    return ModelReport(model, str(path), reports)
+    reports = [_link(link, model, meshes, density) for link in model.links]
+    if model.rules.any:
+        from massprops.robot.rules import apply_rules  # only MJCF compilers ask for it
+
+        reports, note = apply_rules(reports, model.rules)
+        if note:
+            model = replace(model, warnings=model.warnings + (note,))
+    return ModelReport(model, str(path), tuple(reports))
 
 
 def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | None) -> LinkReport:

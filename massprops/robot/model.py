@@ -13,7 +13,7 @@ import numpy as np
 
 from massprops.robot.xmltree import Node
 
-__all__ = ["Geometry", "Link", "RobotModel", "StatedInertial"]
+__all__ = ["Geometry", "Link", "MassRules", "RobotModel", "StatedInertial"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,13 +84,32 @@ class Link:
     warnings: tuple[str, ...] = ()
 
 
+@dataclass(frozen=True)
+class MassRules:
+    """How a simulator's compiler changes every body's inertial after reading it (MJCF
+    ``<compiler>``): ``boundmass`` kg, the least mass of a body; ``boundinertia`` kg·m², the
+    least principal moment; then ``settotalmass`` kg (or None) scales every mass and inertia so
+    that they sum to it (MuJoCo 4.0: bounds first, then the scale; checked against its compiled
+    ``body_mass``)."""
+
+    boundmass: float = 0.0
+    boundinertia: float = 0.0
+    settotalmass: float | None = None
+
+    @property
+    def any(self) -> bool:
+        return self.boundmass > 0 or self.boundinertia > 0 or self.settotalmass is not None
+
+
 @dataclass(frozen=True, eq=False)
 class RobotModel:
     """A parsed description: ``format`` is "urdf", "sdf" or "mjcf"; ``data`` the file's bytes
-    (write-back edits them); ``warnings`` concern the whole model."""
+    (write-back edits them); ``warnings`` concern the whole model; ``rules`` the compiler's
+    changes to every inertial (MJCF)."""
 
     path: Path
     format: str
     links: tuple[Link, ...]
     data: bytes
     warnings: tuple[str, ...] = ()
+    rules: MassRules = field(default_factory=MassRules)

@@ -28,6 +28,8 @@ class Node:
     end : byte offset just after the element (after ``</tag>``, or ``head_end`` for ``<tag/>``).
     text : the character data directly inside it, concatenated (children's text excluded).
     children : child elements in document order. parent : None for the root.
+    file : the file it was read from (an MJCF ``<include>`` splices in another file's nodes;
+        their lines and byte spans are that file's).
     """
 
     tag: str
@@ -40,6 +42,7 @@ class Node:
     text: str = ""
     children: list[Node] = field(default_factory=list)
     parent: Node | None = None
+    file: Path | None = None
 
     @property
     def self_closing(self) -> bool:
@@ -82,7 +85,7 @@ def parse_xml(path: str | os.PathLike) -> tuple[Node, bytes]:
 
 class _Builder:
     def __init__(self, data: bytes, name: str) -> None:
-        self.data, self.name = data, name
+        self.data, self.name, self.path = data, name, Path(name)
         self.stack: list[Node] = []
         self.root: Node | None = None
         self.parser = expat.ParserCreate()
@@ -108,7 +111,8 @@ class _Builder:
     def _start(self, tag: str, attrs: dict[str, str]) -> None:
         p = self.parser
         start = p.CurrentByteIndex
-        node = Node(tag, dict(attrs), p.CurrentLineNumber, p.CurrentColumnNumber, start)
+        node = Node(tag, dict(attrs), p.CurrentLineNumber, p.CurrentColumnNumber, start,
+                    file=self.path)
         node.head_end = _tag_end(self.data, start)
         if self.stack:
             node.parent = self.stack[-1]
