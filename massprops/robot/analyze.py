@@ -74,8 +74,13 @@ class ModelReport:
     @property
     def errors(self) -> list[str]:
         """One line per link that could not be computed because of a bad input."""
-        return [f"{self.name}:{r.link.node.line}: link {r.name!r}: {r.reason}"
+        return [f"{self._file_of(r)}:{r.link.node.line}: link {r.name!r}: {r.reason}"
                 for r in self.links if r.error]
+
+    def _file_of(self, r: LinkReport) -> str:
+        """The file a link is written in: this one, or an included / attached one."""
+        f = r.link.node.file
+        return self.name if f is None or f == self.model.path else str(f)
 
     def failures(self, rtol: float) -> list[str]:
         """Links whose stated inertial differs by more than ``rtol`` (see compare.py), or is not
