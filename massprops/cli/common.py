@@ -103,6 +103,14 @@ def mass_options(f: Callable) -> Callable:
                           "warnings say by how much)."),
         click.option("--input-format", default=None,
                      help="Format of the input (required for '-' = standard input)."),
+        *_repair_flags(),
+    ]):
+        f = opt(f)
+    return f
+
+
+def _repair_flags() -> list:
+    return [
         click.option("--fill-holes", is_flag=True,
                      help="Cap each hole (boundary loop) with a triangulation that keeps its "
                           "shape; the error bar covers the choice of cap."),
@@ -115,7 +123,12 @@ def mass_options(f: Callable) -> Callable:
         click.option("--shell", type=float, callback=positive, metavar="THICKNESS",
                      help="The surface as a wall of this thickness, in METRES whatever --unit "
                           "says (mid-surface model; open and flat surfaces too)."),
-    ]):
+    ]
+
+
+def repair_flags(f: Callable) -> Callable:
+    """--fill-holes / --max-hole / --union / --shell alone (``model`` applies them per mesh)."""
+    for opt in reversed(_repair_flags()):
         f = opt(f)
     return f
 

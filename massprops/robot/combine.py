@@ -41,6 +41,7 @@ class Part:
     lower: np.ndarray
     upper: np.ndarray
     warnings: tuple[str, ...] = ()
+    repairs: dict | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,8 +73,10 @@ class LinkMass:
 class MeshCache:
     """Meshes read once per file and scale (robot descriptions reuse meshes: left and right)."""
 
-    def __init__(self, allow_open: bool = False) -> None:
+    def __init__(self, allow_open: bool = False, repairs=None) -> None:
+        """repairs : a `massprops.repair.RepairOptions` applied to every mesh, or None."""
         self.allow_open = allow_open
+        self.repairs = repairs
         self._store: dict[tuple, tuple] = {}
 
     def get(self, geom: Geometry):
@@ -98,7 +101,8 @@ class MeshCache:
             mesh = mesh.with_vertices(mesh.vertices * scale)
             if np.prod(np.sign(scale)) < 0:  # a mirror turns the surface inside out
                 mesh = mesh.with_faces(np.ascontiguousarray(mesh.faces[:, ::-1]))
-        return mesh, inspect_mesh(mesh, density=1.0, allow_open=self.allow_open)
+        return mesh, inspect_mesh(mesh, density=1.0, allow_open=self.allow_open,
+                                  repairs=self.repairs)
 
 
 def integrate_geometry(geom: Geometry, meshes: MeshCache) -> Part:
@@ -113,7 +117,8 @@ def integrate_geometry(geom: Geometry, meshes: MeshCache) -> Part:
         lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
         centre, half = a @ ((lo + hi) / 2) + t, np.abs(a) @ ((hi - lo) / 2)
         return Part(p.volume, a @ p.center_of_mass + t, rotate_inertia(p.inertia, a),
-                    centre - half, centre + half, tuple(result.warnings))
+                    centre - half, centre + half, tuple(result.warnings),
+                    result.repairs_as_dict())
     solid = PRIMITIVES[geom.kind](*geom.dims)
     half = solid.half_extents(a)
     return Part(solid.volume, np.asarray(t, dtype=np.float64), rotate_inertia(solid.inertia, a),

@@ -13,7 +13,7 @@ import numpy as np
 
 from massprops.robot.xmltree import Node
 
-__all__ = ["Geometry", "Link", "MassRules", "RobotModel", "StatedInertial"]
+__all__ = ["Geometry", "Link", "MassRules", "RobotModel", "StatedInertial", "pick_source"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,6 +74,8 @@ class Link:
     node : its element. stated : its inertial, or None. geometries : what it is made of (the
     collision or visual set, as asked). warnings : remarks about the description (not errors).
     inertial_node : the element to replace on write-back (None: insert a new one).
+    source : which geometry ``geometries`` is: "collision" or "visual" (with ``--from auto``, a
+        link with no collision element falls back to its visual ones).
     """
 
     name: str
@@ -82,6 +84,7 @@ class Link:
     geometries: tuple[Geometry, ...]
     inertial_node: Node | None = None
     warnings: tuple[str, ...] = ()
+    source: str = "collision"
 
 
 @dataclass(frozen=True)
@@ -113,3 +116,12 @@ class RobotModel:
     data: bytes
     warnings: tuple[str, ...] = ()
     rules: MassRules = field(default_factory=MassRules)
+
+
+def pick_source(source: str, collisions: list, visuals: list) -> str:
+    """Which geometry elements make a link: ``source`` "collision" or "visual" as asked; "auto"
+    takes the collision elements, or the visual ones for a link that has no collision element
+    (what a user means for a link drawn but never collided)."""
+    if source != "auto":
+        return source
+    return "visual" if not collisions and visuals else "collision"

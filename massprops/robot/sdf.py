@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.robot.model import Geometry, Link, RobotModel, StatedInertial
+from massprops.robot.model import Geometry, Link, RobotModel, StatedInertial, pick_source
 from massprops.robot.poses import quat_matrix, rpy_matrix
 from massprops.robot.sdf_include import expand_sdf_includes
 from massprops.robot.uris import resolve_uri
@@ -59,12 +59,13 @@ def parse_sdf(root: Node, data: bytes, path: Path, *, source: str = "collision",
             inertial = node.find("inertial")
             stated = _stated(inertial, v, warnings) if inertial is not None else None
             geoms = []
-            for element in node.findall(source):
+            used = pick_source(source, node.findall("collision"), node.findall("visual"))
+            for element in node.findall(used):
                 geom = _geometry(element, name, frames, v, path, package_paths, warnings)
                 if geom is not None:
                     geoms.append(geom)
             links.append(Link(prefix + name, node, stated, tuple(geoms), inertial,
-                              tuple(warnings)))
+                              tuple(warnings), source=used))
     return RobotModel(path, "sdf", tuple(links), data)
 
 

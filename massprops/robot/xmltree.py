@@ -14,7 +14,7 @@ from xml.parsers import expat
 
 from massprops.errors import MeshFileError, RobotModelError
 
-__all__ = ["Node", "parse_xml"]
+__all__ = ["Node", "parse_xml", "parse_xml_bytes"]
 
 
 @dataclass(eq=False)
@@ -81,6 +81,11 @@ def parse_xml(path: str | os.PathLike) -> tuple[Node, bytes]:
     except OSError as exc:
         raise MeshFileError(f"{p}: cannot read the file ({exc.strerror or exc})") from exc
     return _Builder(data, str(p)).run(), data
+
+
+def parse_xml_bytes(data: bytes, name: str) -> Node:
+    """Parse XML held in memory (e.g. xacro's output); messages and ``Node.file`` say ``name``."""
+    return _Builder(data, name).run()
 
 
 class _Builder:
