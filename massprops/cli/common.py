@@ -28,11 +28,35 @@ robot formats' <inertial> elements."""
 
 
 def say_error(message: str) -> None:
-    click.echo(f"massprops: error: {message}", err=True)
+    click.echo(f"massprops: error: {fitted(message)}", err=True)
 
 
 def say_warning(name: str, message: str) -> None:
-    click.echo(f"massprops: warning: {name}: {message}", err=True)
+    click.echo(f"massprops: warning: {name}: {fitted(message)}", err=True)
+
+
+SCENE_COMMANDS = ("simulate", "precision")
+"""Commands that read a scene file: an inspect option in a message becomes its scene key."""
+
+
+def command_options(command: click.Command) -> set[str]:
+    """The long options (without dashes) a command and the top-level group accept."""
+    ctx = click.get_current_context(silent=True)
+    group = ctx.find_root().command.params if ctx is not None else []
+    return {opt[2:] for p in [*command.params, *group]
+            for opt in [*getattr(p, "opts", []), *getattr(p, "secondary_opts", [])]
+            if opt.startswith("--")}
+
+
+def fitted(message: str) -> str:
+    """``message`` naming only options the running command has (`messages.fit_message`)."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is None or "--" not in message:
+        return message
+    from massprops.cli.messages import fit_message  # only for messages that name options
+
+    return fit_message(message, command_options(ctx.command),
+                       scene=ctx.info_name in SCENE_COMMANDS)
 
 
 def say_note(message: str) -> None:
