@@ -134,3 +134,71 @@ def test_against_mujoco_compiled_bodies(name, tmp_path):
         assert np.allclose(com, model.body_ipos[i], rtol=0, atol=rtol * 0.5)
         assert np.allclose(j, _mujoco_tensor(model, i), rtol=0,
                            atol=rtol * float(np.max(model.body_inertia[i])))
+
+
+def _box_mesh_files(folder, open_mesh):
+    """A 0.1 × 0.2 × 0.3 box as an OBJ (without its bottom when ``open_mesh``) and as MuJoCo's
+    binary .msh (float32 positions: 0.1, 0.2, 0.3 rounded)."""
+    from conftest import CUBE_QUADS, CUBE_VERTS
+
+    size = np.array([0.1, 0.2, 0.3])
+    verts = np.array(CUBE_VERTS, float) * size
+    quads = CUBE_QUADS[1:] if open_mesh else CUBE_QUADS
+    (folder / "box.obj").write_text(
+        "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in verts.tolist())
+        + "".join("f " + " ".join(str(i + 1) for i in q) + "\n" for q in quads))
+    tris = np.array([[q[0], q[1], q[2]] for q in CUBE_QUADS] + [[q[0], q[2], q[3]]
+                                                                  for q in CUBE_QUADS])
+    header = np.array([8, 0, 0, 12], dtype="<i4").tobytes()
+    (folder / "box.msh").write_bytes(header + verts.astype("<f4").tobytes()
+                                     + tris.astype("<i4").tobytes())
+
+
+@pytest.mark.parametrize("inertia, expect", [("legacy", "hull"), ("convex", "hull"),
+                                             ("exact", "refused")])
+def test_open_mesh_in_mjcf_takes_the_hull_mujoco_integrates(tmp_path, inertia, expect):
+    """An open box (bottom missing) under MuJoCo's default mesh inertia is the box MuJoCo
+    simulates (its convex hull): V = 0.006, COM at the centre; with inertia="exact" MuJoCo
+    needs a closed mesh too, so it is refused."""
+    _box_mesh_files(tmp_path, open_mesh=True)
+    f = tmp_path / "m.xml"
+    f.write_text(f'<mujoco><asset><mesh name="b" file="box.obj" inertia="{inertia}"/></asset>'
+                 '<worldbody><body name="a"><geom type="mesh" mesh="b"/></body></worldbody>'
+                 '</mujoco>')
+    r = links(f)["a"]
+    if expect == "refused":
+        assert r.status == "skipped" and r.error and "not closed" in r.reason
+        return
+    assert r.status == "computed"
+    assert r.computed.volume == pytest.approx(0.006, rel=1e-14)
+    assert r.computed.center_of_mass == pytest.approx([0.05, 0.1, 0.15], rel=1e-14)
+    assert any("convex hull" in w for w in r.warnings)
+
+
+def test_mujoco_msh_mesh_and_massless_geoms(tmp_path):
+    """MuJoCo's binary .msh box (float32 corners) at density 1000, and a mass="0" decoration
+    that adds nothing (MuJoCo's rule); a body with only massless geoms and an inertial is
+    stated-only."""
+    _box_mesh_files(tmp_path, open_mesh=False)
+    f = tmp_path / "m.xml"
+    f.write_text('<mujoco><asset><mesh name="b" file="box.msh" inertia="exact"/></asset>'
+                 '<worldbody><body name="a"><geom type="mesh" mesh="b"/>'
+                 '<geom type="sphere" size="1" mass="0"/></body>'
+                 '<body name="c"><inertial pos="0 0 0" mass="2" diaginertia="1 1 1"/>'
+                 '<geom type="box" size="1 1 1" mass="0"/></body></worldbody></mujoco>')
+    r = links(f)
+    edges = np.array([0.1, 0.2, 0.3], dtype=np.float32).astype(float)
+    assert r["a"].computed.mass == pytest.approx(1000 * np.prod(edges), rel=1e-14)
+    assert r["a"].computed.center_of_mass == pytest.approx(edges / 2, rel=1e-14)
+    assert r["c"].status == "stated-only"
+
+
+def test_lenient_xml_blank_lines_before_declaration_and_trailing_junk(tmp_path):
+    f = tmp_path / "r.urdf"
+    f.write_text('\n\n<?xml version="1.0"?>\n<robot name="r"><link name="a"><inertial>'
+                 '<mass value="2"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/>'
+                 '</inertial><collision><geometry><sphere radius="0.5"/></geometry>'
+                 '</collision></link></robot>\n\x01junk')
+    r = links(f)["a"]
+    assert r.status == "computed" and r.computed.inertia[0, 0] == pytest.approx(0.2, rel=1e-14)
+    assert r.link.node.line == 4   # the blanked declaration keeps the lines

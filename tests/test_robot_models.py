@@ -331,7 +331,7 @@ BAD = {
                     "</radius></sphere></geometry></collision></link></model></sdf>", 1,
                     ":2: <pose>"),
     "xacro.urdf": ('<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="r">\n'
-                   '<xacro:property name="l" value="1"/></robot>', 1, "xacro"),
+                   '<link name="${nope}"/></robot>', 1, "xacro failed"),
     "not-a-robot.xml": ("<html><body/></html>", 1, "<html>"),
     "include.xml": ('<mujoco>\n<include file="other.xml"/></mujoco>', 1,
                     ":2: <include file='other.xml'>: no such file"),

@@ -18,7 +18,7 @@ from massprops.errors import CheckFailedError, MassPropsError, RobotModelError, 
 from massprops.robot.combine import LinkMass, MeshCache, combine, integrate_geometry
 from massprops.robot.compare import Comparison, compare, validity_problems
 from massprops.robot.model import Link, RobotModel
-from massprops.robot.xacro_run import EXPANDED, expand_xacro, is_xacro
+from massprops.robot.xacro_run import EXPANDED, expand_xacro, has_xacro, is_xacro
 from massprops.robot.xmltree import parse_xml, parse_xml_bytes
 
 __all__ = ["LinkReport", "ModelReport", "analyze_model", "load_model", "FORMATS_BY_ROOT"]
@@ -150,6 +150,13 @@ def load_model(path: str | os.PathLike, *, source: str = "auto",
         root = parse_xml_bytes(data, f"{p}{EXPANDED}")
     else:
         root, data = parse_xml(p)
+    note = None
+    if root.tag == "robot" and not is_xacro(p) and has_xacro(root):
+        # a .urdf still holding xacro (e.g. $(optenv ...) left by a partial expansion): what
+        # ROS tools do with it is run xacro, so do that rather than refuse the robot
+        data = expand_xacro(p, xacro_args, package_paths=[Path(d) for d in package_paths])
+        root = parse_xml_bytes(data, f"{p}{EXPANDED}")
+        note = "the file holds xacro expressions: expanded by xacro first"
     fmt = FORMATS_BY_ROOT.get(root.tag)
     if fmt is None:
         raise RobotModelError(f"{p}:{root.line}: <{root.tag}>: not a robot description; expected "
@@ -160,8 +167,8 @@ def load_model(path: str | os.PathLike, *, source: str = "auto",
         from massprops.robot.sdf import parse_sdf as parse
     else:
         from massprops.robot.mjcf import parse_mjcf as parse
-    return parse(root, data, p, source=source,
-                 package_paths=[Path(d) for d in package_paths])
+    model = parse(root, data, p, source=source, package_paths=[Path(d) for d in package_paths])
+    return model if note is None else replace(model, warnings=(note, *model.warnings))
 
 
 def analyze_model(path: str | os.PathLike, *, source: str = "auto",

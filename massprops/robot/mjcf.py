@@ -33,6 +33,7 @@ import numpy as np
 
 from massprops.robot.mjcf_tree import expand_includes, replicate_frames, replicate_suffix
 from massprops.robot.model import Geometry, Link, MassRules, RobotModel, StatedInertial
+from massprops.robot.msh import read_msh
 from massprops.robot.poses import (
     axisangle_matrix,
     euler_matrix,
@@ -297,6 +298,8 @@ class _Walker:
         kind = a.get("type", "sphere")
         density = float(a.get("density", _DEFAULT_DENSITY))
         mass = float(a["mass"]) if "mass" in a else None
+        if (mass if mass is not None else density) == 0:
+            return None  # a massless geom (a decoration, a camera box): no part of the body
         size = v.numbers(node, a["size"], "size=", (1, 2, 3), 'size="0.1 0.2 0.3"') \
             if "size" in a else np.zeros(0)
         pose = _pose(a, node, compiler, v)
@@ -340,7 +343,8 @@ class _Walker:
                            "to the <mesh> to make MuJoCo agree on a non-convex mesh)")
             return Geometry("mesh", path=mesh["path"], uri=mesh["uri"], scale=mesh["scale"],
                             problem=mesh["problem"], vertices=mesh["vertices"],
-                            faces=mesh["faces"], warning=warning, **common)
+                            faces=mesh["faces"], warning=warning,
+                            hull=mesh["inertia"] in ("convex", "legacy"), **common)
         return Geometry(kind, problem=f"geom type {kind!r} (line {node.line}) has no volume "
                                       "massprops can integrate", **common)
 
@@ -425,6 +429,8 @@ def _meshes(root: Node, defaults: _Defaults, compiler: _Compiler, v: Values, pat
                 ref = Path(file).name if compiler.strippath else file
                 entry["path"], entry["problem"] = resolve_uri(ref, compiler.meshdir, path,
                                                               package_paths)
+                if entry["problem"] is None and entry["path"].suffix.lower() == ".msh":
+                    read_msh(entry)
             else:
                 entry["problem"] = (f"<mesh name={name!r}> (line {node.line}) has no file= "
                                     "(a vertex-only mesh is MuJoCo's convex hull: not supported)")

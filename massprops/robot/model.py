@@ -47,6 +47,9 @@ class Geometry:
         None. A link with a problem is skipped and counted as an input error.
     vertices, faces : an inline mesh (MJCF ``<mesh vertex= face=>``), else None.
     warning : a remark about how a simulator treats it (not an error), or None.
+    hull : the simulator integrates this mesh's convex hull (MJCF mesh inertia "convex", and
+        "legacy" for a convex mesh): a mesh that is not a closed solid is then taken as its hull,
+        with a warning, instead of being refused.
     node : the element it came from (line numbers).
     """
 
@@ -64,6 +67,7 @@ class Geometry:
     vertices: np.ndarray | None = None
     faces: np.ndarray | None = None
     warning: str | None = None
+    hull: bool = False
 
 
 @dataclass(frozen=True, eq=False)

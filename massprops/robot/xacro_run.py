@@ -15,7 +15,7 @@ from pathlib import Path
 
 from massprops.errors import MassPropsError, RobotModelError
 
-__all__ = ["EXPANDED", "expand_xacro", "is_xacro"]
+__all__ = ["EXPANDED", "expand_xacro", "has_xacro", "is_xacro"]
 
 EXPANDED = " (expanded by xacro)"
 """Appended to the file name in messages about the expanded text (its line numbers)."""
@@ -23,6 +23,14 @@ EXPANDED = " (expanded by xacro)"
 
 def is_xacro(path: Path) -> bool:
     return path.suffix.lower() == ".xacro"
+
+
+def has_xacro(root) -> bool:
+    """Whether a parsed description (`xmltree.Node`) still holds xacro elements or ``${...}`` /
+    ``$(...)`` expressions."""
+    return any(node.tag.startswith("xacro:") or any("${" in a or "$(" in a
+                                                    for a in node.attrs.values())
+               for node in root.iter())
 
 
 def expand_xacro(path: Path, args: Mapping[str, str] | None = None,

@@ -101,9 +101,14 @@ class _Builder:
         self.parser.CharacterDataHandler = self._text
 
     def run(self) -> Node:
+        self.data = _declaration_first(self.data)
         try:
             self.parser.Parse(self.data, True)
         except expat.ExpatError as exc:
+            if self.root is not None and self.root.end >= 0:
+                # bytes after the root element closed (stray text some exporters append):
+                # the description itself is complete, as ROS's and pybullet's readers accept
+                return self.root
             raise RobotModelError(
                 f"{self.name}:{exc.lineno}: malformed XML at column {exc.offset}: "
                 f"{expat.ErrorString(exc.code)}; fix the file (an XML validator shows the "
@@ -136,6 +141,20 @@ class _Builder:
     def _text(self, text: str) -> None:
         if self.stack:
             self.stack[-1].text += text
+
+
+def _declaration_first(data: bytes) -> bytes:
+    """The XML declaration moved over the blank lines some files put before it: expat refuses
+    a declaration that is not the first thing in the file. It is blanked out (replaced by
+    spaces, so every byte offset and line number stays) when only whitespace precedes it."""
+    stripped = data.lstrip()
+    if stripped is data or not stripped.startswith(b"<?xml"):
+        return data
+    end = stripped.find(b"?>")
+    if end < 0:
+        return data
+    start = len(data) - len(stripped)
+    return data[:start] + b" " * (end + 2) + data[start + end + 2:]
 
 
 def _tag_end(data: bytes, at: int) -> int:
