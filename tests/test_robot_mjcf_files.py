@@ -109,11 +109,12 @@ def _mujoco_tensor(model, i):
 
 
 @pytest.mark.parametrize("name", ["split", "bounds"])
-def test_against_mujoco_compiled_bodies(name, tmp_path):
+def test_against_mujoco_compiled_bodies(name, tmp_path, monkeypatch):
     """MuJoCo's body_mass, body_ipos and body_inertia (principal moments in the body_iquat
     frame, turned back into the body's axes here): what massprops states where the body has an
     <inertial>, else what it computes. MuJoCo stores meshes in float32: 1e-6 for those."""
     mujoco = pytest.importorskip("mujoco")
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes MUJOCO_LOG.TXT (settotalmass's deprecation) here
     if name == "split":
         path = SPLIT
     else:
