@@ -25,8 +25,10 @@ from __future__ import annotations
 
 import argparse
 import concurrent.futures as cf
+import os
 import re
 import sys
+import tempfile
 import xml.etree.ElementTree as ET
 from collections import Counter
 from pathlib import Path
@@ -149,6 +151,9 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--quiet", action="store_true", help="Totals only, no refusal lines.")
     args = ap.parse_args(argv)
+    args.roots = [r.resolve() for r in args.roots]
+    # MuJoCo writes MUJOCO_LOG.TXT into the working folder for every model it refuses
+    os.chdir(tempfile.mkdtemp(prefix="yardstick-"))
     files = find_descriptions(args.roots)
     package_paths = [str(r) for r in args.roots]
     totals = {"main": Counter(), "generated": Counter()}
