@@ -331,9 +331,10 @@ BAD = {
                     "</radius></sphere></geometry></collision></link></model></sdf>", 1,
                     ":2: <pose>"),
     "xacro.urdf": ('<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="r">\n'
-                   '<xacro:property name="l" value="1"/></robot>', 1, "xacro"),
+                   '<link name="${nope}"/></robot>', 1, "xacro failed"),
     "not-a-robot.xml": ("<html><body/></html>", 1, "<html>"),
-    "include.xml": ('<mujoco>\n<include file="other.xml"/></mujoco>', 1, ":2: <include>"),
+    "include.xml": ('<mujoco>\n<include file="other.xml"/></mujoco>', 1,
+                    ":2: <include file='other.xml'>: no such file"),
     "bad-number.urdf": ('<robot name="r"><link name="a"><collision><geometry>\n'
                         '<box size="1 2"/></geometry></collision></link></robot>', 1,
                         ":2: <box>: size="),

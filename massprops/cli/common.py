@@ -46,11 +46,35 @@ def cli_text(text: str) -> str:
 
 
 def say_error(message: str) -> None:
-    click.echo(f"massprops: error: {cli_text(message)}", err=True)
+    click.echo(f"massprops: error: {fitted(cli_text(message))}", err=True)
 
 
 def say_warning(name: str, message: str) -> None:
-    click.echo(f"massprops: warning: {name}: {cli_text(message)}", err=True)
+    click.echo(f"massprops: warning: {name}: {fitted(cli_text(message))}", err=True)
+
+
+SCENE_COMMANDS = ("simulate", "precision")
+"""Commands that read a scene file: an inspect option in a message becomes its scene key."""
+
+
+def command_options(command: click.Command) -> set[str]:
+    """The long options (without dashes) a command and the top-level group accept."""
+    ctx = click.get_current_context(silent=True)
+    group = ctx.find_root().command.params if ctx is not None else []
+    return {opt[2:] for p in [*command.params, *group]
+            for opt in [*getattr(p, "opts", []), *getattr(p, "secondary_opts", [])]
+            if opt.startswith("--")}
+
+
+def fitted(message: str) -> str:
+    """``message`` naming only options the running command has (`messages.fit_message`)."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is None or "--" not in message:
+        return message
+    from massprops.cli.messages import fit_message  # only for messages that name options
+
+    return fit_message(message, command_options(ctx.command),
+                       scene=ctx.info_name in SCENE_COMMANDS)
 
 
 def say_note(message: str) -> None:
@@ -124,6 +148,14 @@ def mass_options(f: Callable) -> Callable:
                           "warnings say by how much)."),
         click.option("--input-format", default=None,
                      help="Format of the input (required for '-' = standard input)."),
+        *_repair_flags(),
+    ]):
+        f = opt(f)
+    return f
+
+
+def _repair_flags() -> list:
+    return [
         click.option("--fill-holes", is_flag=True,
                      help="Cap each hole (boundary loop) with a triangulation that keeps its "
                           "shape; the error bar covers the choice of cap."),
@@ -136,7 +168,12 @@ def mass_options(f: Callable) -> Callable:
         click.option("--shell", type=float, callback=positive, metavar="THICKNESS",
                      help="The surface as a wall of this thickness, in METRES whatever --unit "
                           "says (mid-surface model; open and flat surfaces too)."),
-    ]):
+    ]
+
+
+def repair_flags(f: Callable) -> Callable:
+    """--fill-holes / --max-hole / --union / --shell alone (``model`` applies them per mesh)."""
+    for opt in reversed(_repair_flags()):
         f = opt(f)
     return f
 

@@ -5,7 +5,16 @@ from __future__ import annotations
 import click
 
 from massprops.cli.app import cli
-from massprops.cli.common import emit_json, guarded, non_negative, positive, say_error, say_warning
+from massprops.cli.common import (
+    emit_json,
+    guarded,
+    non_negative,
+    positive,
+    repair_flags,
+    repair_options,
+    say_error,
+    say_warning,
+)
 
 
 @cli.command()
@@ -18,28 +27,43 @@ from massprops.cli.common import emit_json, guarded, non_negative, positive, say
 @click.option("--write", "output_path", default=None, metavar="OUT",
               help="Write the description with the computed inertials (never over FILE).")
 @click.option("--force", is_flag=True, help="Replace OUT if it exists (never FILE).")
-@click.option("--from", "source", type=click.Choice(("collision", "visual")),
-              default="collision", show_default=True, help="Which geometry makes the link.")
+@click.option("--from", "source", type=click.Choice(("collision", "visual")), default=None,
+              help="Which geometry makes every link (default: collision, or visual for a link "
+                   "with no collision geometry, noted as source: visual).")
 @click.option("--density", type=float, callback=positive,
               help="Density in kg/m³ for every geometry (default: keep each stated mass).")
 @click.option("--package-path", "package_paths", multiple=True, metavar="DIR",
               help="Folder holding packages for package:// and model:// (repeatable; "
                    "ROS_PACKAGE_PATH is searched too).")
 @click.option("--allow-open", is_flag=True, help="Compute open meshes anyway (with warnings).")
+@repair_flags
+@click.option("--xacro-arg", "xacro_args", multiple=True, metavar="NAME:=VALUE",
+              help="An argument for a .xacro FILE (repeatable), as `xacro FILE NAME:=VALUE`.")
 @click.pass_context
 def model(ctx: click.Context, description: str, as_json: bool, rtol: float | None,
-          output_path: str | None, force: bool, source: str, density: float | None,
-          package_paths: tuple[str, ...], allow_open: bool) -> None:
-    """Inertials of every link of a robot description (URDF, SDF or MJCF FILE) from its meshes
-    and primitives, against the inertials it states."""
+          output_path: str | None, force: bool, source: str | None, density: float | None,
+          package_paths: tuple[str, ...], allow_open: bool, fill_holes: bool,
+          max_hole: float | None, union: bool, shell: float | None,
+          xacro_args: tuple[str, ...]) -> None:
+    """Inertials of every link of a robot description (URDF, SDF, MJCF or .xacro FILE) from its
+    meshes and primitives, against the inertials it states. Repairs apply to each mesh."""
     link_errors = []
+    repairs = repair_options(fill_holes, max_hole, union, shell)
+    mappings = {}
+    for arg in xacro_args:
+        name, sep, value = arg.partition(":=")
+        if not sep or not name:
+            raise click.BadParameter(f"expected NAME:=VALUE, got {arg!r}",
+                                     param_hint="--xacro-arg")
+        mappings[name] = value
 
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
         from massprops.robot.analyze import analyze_model
 
-        report = analyze_model(description, source=source, density=density,
-                               package_paths=package_paths, allow_open=allow_open)
+        report = analyze_model(description, source=source or "auto", density=density,
+                               package_paths=package_paths, allow_open=allow_open,
+                               xacro_args=mappings, repairs=repairs)
         for w in report.model.warnings:
             say_warning(description, w)
         for line in report.errors:

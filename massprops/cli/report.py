@@ -215,7 +215,7 @@ def print_model(report, rtol: float | None = None) -> None:
     notes = []
     for r in report.links:
         if r.computed is None:
-            _row(t, r.name, "", "", "", "", "", "", "", "skipped")
+            _row(t, r.name, "", "", "", "", "", "", "", r.status)
             notes.append(f"{r.name}: {cli_text(r.reason)}")
             continue
         c, cmp = r.computed, r.comparison
@@ -229,6 +229,8 @@ def print_model(report, rtol: float | None = None) -> None:
                  "yes" if not cmp.problems else "NO", verdict)
             notes.extend(f"{r.name}: stated {p}" for p in cmp.problems)
         notes.extend(f"{r.name}: {cli_text(w)}" for w in r.warnings)
+        notes.extend(f"{r.name}: {mesh}: repaired ({', '.join(rec)})"
+                     for mesh, rec in (r.repairs or {}).items())
     _console.print(t)
     for n in notes:
         _console.print(Text(n, style="yellow"))

@@ -58,6 +58,12 @@ class Format:
         return [(path.with_suffix(s.upper() if upper else s), w) for s, w in self.parts]
 
 
+def _read_dae(source: Source) -> Mesh:
+    from massprops.io.collada import read_dae  # lazy: `inspect` of other formats loads no XML
+
+    return read_dae(source)
+
+
 FORMATS: dict[str, Format] = {
     "obj": Format((".obj",), obj.read_obj, obj.write_obj),
     "stl": Format((".stl",), stl.read_stl, stl.write_stl),
@@ -69,6 +75,7 @@ FORMATS: dict[str, Format] = {
     "vtk": Format((".vtk",), FallbackReader("vtk", None, ".vtk")),
     "vtu": Format((".vtu",), FallbackReader("vtu", None, ".vtu")),
     "msh": Format((".msh",), FallbackReader("gmsh", None, ".msh")),
+    "dae": Format((".dae",), _read_dae),
     "gltf": Format((".gltf",), FallbackReader(None, "gltf", ".gltf", float32_only=True)),
     "glb": Format((".glb",), FallbackReader(None, "glb", ".glb", float32_only=True)),
 }

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -25,11 +25,13 @@ from massprops.errors import (
 from massprops.robot.combine import LinkMass, MeshCache, combine, integrate_geometry
 from massprops.robot.compare import Comparison, compare, validity_problems
 from massprops.robot.model import Link, RobotModel
-from massprops.robot.xmltree import parse_xml
+from massprops.robot.xacro_run import EXPANDED, expand_xacro, has_xacro, is_xacro
+from massprops.robot.xmltree import parse_xml, parse_xml_bytes
 
 __all__ = ["LinkReport", "ModelReport", "analyze_model", "load_model", "FORMATS_BY_ROOT"]
 
-SOURCES = ("collision", "visual")
+SOURCES = ("auto", "collision", "visual")
+"""auto: each link's collision geometry, or its visual geometry when it has none."""
 
 FORMATS_BY_ROOT = {"robot": "urdf", "sdf": "sdf", "mujoco": "mjcf"}
 """Root element -> format: the file's content decides, not its extension (.xml is both)."""
@@ -37,9 +39,11 @@ FORMATS_BY_ROOT = {"robot": "urdf", "sdf": "sdf", "mujoco": "mjcf"}
 
 @dataclass(frozen=True, eq=False)
 class LinkReport:
-    """One link: status "computed" or "skipped"; ``reason`` why skipped; ``error`` True when the
+    """One link: status "computed", "stated-only" (a stated inertial and no geometry at all:
+    reported as it is) or "skipped"; ``reason`` why not computed; ``error`` True when the
     skip means an input could not be processed (a missing or unreadable mesh), False for a link
-    that simply has nothing to compute (no geometry, a frame link)."""
+    that simply has nothing to compute (no geometry, a frame link). ``repairs``: mesh reference
+    -> its ``repairs`` object, for the meshes a repair changed (None: none did)."""
 
     link: Link
     status: str
@@ -48,6 +52,7 @@ class LinkReport:
     computed: LinkMass | None
     comparison: Comparison | None
     warnings: tuple[str, ...]
+    repairs: dict | None = None
 
     @property
     def name(self) -> str:
@@ -58,7 +63,8 @@ class LinkReport:
         return () if s is None else validity_problems(s.mass, s.inertia)
 
     def as_dict(self, model: str) -> dict:
-        """The contract's JSON object for this link, plus "line" and "comparison"."""
+        """The contract's JSON object for this link, plus "line", "comparison", "source" (which
+        geometry made it) and, where a repair changed a mesh, "repairs" (mesh -> record)."""
         s = self.link.stated
         stated = None if s is None else {
             "mass": s.mass, "center_of_mass": s.center_of_mass.tolist(),
@@ -67,6 +73,8 @@ class LinkReport:
                 "status": self.status, "reason": self.reason, "stated": stated,
                 "computed": None if self.computed is None else self.computed.as_dict(),
                 "comparison": None if self.comparison is None else self.comparison.as_dict(),
+                "source": self.link.source if self.link.geometries else None,
+                **({"repairs": self.repairs} if self.repairs else {}),
                 "warnings": list(self.warnings)}
 
 
@@ -81,8 +89,13 @@ class ModelReport:
     @property
     def errors(self) -> list[str]:
         """One line per link that could not be computed because of a bad input."""
-        return [f"{self.name}:{r.link.node.line}: link {r.name!r}: {r.reason}"
+        return [f"{self._file_of(r)}:{r.link.node.line}: link {r.name!r}: {r.reason}"
                 for r in self.links if r.error]
+
+    def _file_of(self, r: LinkReport) -> str:
+        """The file a link is written in: this one, or an included / attached one."""
+        f = r.link.node.file
+        return self.name if f is None or f == self.model.path else str(f)
 
     def failures(self, rtol: float) -> list[str]:
         """Links whose stated inertial differs by more than ``rtol`` (see compare.py), or is not
@@ -117,18 +130,41 @@ class ModelReport:
 
         edits = [(r.link.node, r.link.inertial_node, r.computed) for r in self.links
                  if r.computed is not None]
+        own = (self.model.path, Path(f"{self.model.path}{EXPANDED}"))
+        elsewhere = [r.name for r in self.links if r.computed is not None
+                     and r.link.node.file is not None and r.link.node.file not in own]
+        if elsewhere:
+            raise UsageError(f"{self.name}: --write edits this file only, but link(s) "
+                             f"{', '.join(elsewhere[:3])} come from an included or attached "
+                             "file; write the inertials there by hand or save the compiled "
+                             "model (mujoco.mj_saveLastXML) first")
         data = edited_bytes(self.model.data, self.model.format, edits)
         write_description(data, out, source=self.model.path, force=force)
         return len(edits)
 
 
-def load_model(path: str | os.PathLike, *, source: str = "collision",
-               package_paths: Sequence[str | os.PathLike] = ()) -> RobotModel:
-    """Parse a URDF, SDF or MJCF file (told apart by its root element) into the neutral model."""
+def load_model(path: str | os.PathLike, *, source: str = "auto",
+               package_paths: Sequence[str | os.PathLike] = (),
+               xacro_args: Mapping[str, str] | None = None) -> RobotModel:
+    """Parse a URDF, SDF or MJCF file (told apart by its root element) into the neutral model;
+    a ``.xacro`` file is expanded first by xacro with ``xacro_args`` (`xacro_run`)."""
     if source not in SOURCES:
         raise UsageError(f"source must be one of {', '.join(SOURCES)}, got {source!r}")
     p = Path(path)
-    root, data = parse_xml(p)
+    if is_xacro(p):
+        if not p.is_file():
+            parse_xml(p)  # the reader's own "no such file" / "is a directory" message
+        data = expand_xacro(p, xacro_args, package_paths=[Path(d) for d in package_paths])
+        root = parse_xml_bytes(data, f"{p}{EXPANDED}")
+    else:
+        root, data = parse_xml(p)
+    note = None
+    if root.tag == "robot" and not is_xacro(p) and has_xacro(root):
+        # a .urdf still holding xacro (e.g. $(optenv ...) left by a partial expansion): what
+        # ROS tools do with it is run xacro, so do that rather than refuse the robot
+        data = expand_xacro(p, xacro_args, package_paths=[Path(d) for d in package_paths])
+        root = parse_xml_bytes(data, f"{p}{EXPANDED}")
+        note = "the file holds xacro expressions: expanded by xacro first"
     fmt = FORMATS_BY_ROOT.get(root.tag)
     if fmt is None:
         raise RobotModelError(f"{p}:{root.line}: <{root.tag}>: not a robot description; expected "
@@ -142,18 +178,23 @@ def load_model(path: str | os.PathLike, *, source: str = "collision",
     else:
         # deferred: a description loads only its own format's parser
         from massprops.robot.mjcf import parse_mjcf as parse
-    return parse(root, data, p, source=source,
-                 package_paths=[Path(d) for d in package_paths])
+    model = parse(root, data, p, source=source, package_paths=[Path(d) for d in package_paths])
+    return model if note is None else replace(model, warnings=(note, *model.warnings))
 
 
-def analyze_model(path: str | os.PathLike, *, source: str = "collision",
+def analyze_model(path: str | os.PathLike, *, source: str = "auto",
                   density: float | None = None,
                   package_paths: Sequence[str | os.PathLike] = (),
-                  allow_open: bool = False) -> ModelReport:
+                  allow_open: bool = False,
+                  xacro_args: Mapping[str, str] | None = None,
+                  repairs=None) -> ModelReport:
     """Every link of the description at ``path``: its geometry integrated, against its stated
     inertial.
 
-    source : "collision" (default) or "visual" geometry (MJCF: see mjcf.py).
+    source : "auto" (default: collision geometry, else visual with a note), "collision" or
+        "visual" (MJCF: see mjcf.py; auto is collision there, MuJoCo's mass geoms).
+    repairs : a `massprops.repair.RepairOptions` applied to every mesh (per mesh, reported
+        per link), or None.
     density : kg/m³ for every geometry; default: keep each link's stated mass (the density
         follows from its geometry's volume); MJCF bodies without an inertial use their geoms'
         own density/mass (MuJoCo's rule); URDF/SDF links without a stated mass are skipped.
@@ -162,32 +203,47 @@ def analyze_model(path: str | os.PathLike, *, source: str = "collision",
     """
     if density is not None and not (math.isfinite(density) and density > 0):
         raise UsageError(f"density must be a positive finite number, got {density!r}")
-    model = load_model(path, source=source, package_paths=package_paths)
-    meshes = MeshCache(allow_open=allow_open)
-    reports = tuple(_link(link, model, meshes, density) for link in model.links)
-    return ModelReport(model, str(path), reports)
+    model = load_model(path, source=source, package_paths=package_paths, xacro_args=xacro_args)
+    meshes = MeshCache(allow_open=allow_open, repairs=repairs)
+    reports = [_link(link, model, meshes, density, source) for link in model.links]
+    if model.rules.any:
+        from massprops.robot.rules import apply_rules  # only MJCF compilers ask for it
+
+        reports, note = apply_rules(reports, model.rules)
+        if note:
+            model = replace(model, warnings=model.warnings + (note,))
+    return ModelReport(model, str(path), tuple(reports))
 
 
-def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | None) -> LinkReport:
+def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | None,
+          source: str) -> LinkReport:
     warnings = list(link.warnings)
 
     def skipped(reason: str, error: bool) -> LinkReport:
         return LinkReport(link, "skipped", reason, error, None, None, tuple(warnings))
 
     if not link.geometries:
+        if link.stated is not None and link.stated.mass > 0:
+            return LinkReport(link, "stated-only", "no geometry: the stated inertial is "
+                              "reported as it is", False, None, None, tuple(warnings))
         return skipped("no geometry (a frame or dummy link)" if not link.stated else
                        "no geometry to compute its inertial from", False)
+    if link.source == "visual" and source == "auto" and model.format != "mjcf":
+        warnings.append("source: visual (the link has no collision geometry)")
     for g in link.geometries:
         if g.problem:
             return skipped(g.problem, True)
     warnings.extend(g.warning for g in link.geometries if g.warning)
     parts = []
+    repaired: dict = {}
     for g in link.geometries:
         try:
             part = integrate_geometry(g, meshes)
         except MassPropsError as exc:
             return skipped(f"{g.uri or g.kind} (line {g.node.line}): {error_message(exc)}", True)
         warnings.extend(f"{g.uri}: {w}" for w in part.warnings)
+        if part.repairs:
+            repaired[g.uri or g.kind] = part.repairs
         parts.append(part)
     stated = link.stated
     total = None
@@ -213,4 +269,5 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         comparison = compare(stated, computed)
     if not np.isfinite(computed.inertia).all():
         return skipped("the computed inertia is not finite", True)
-    return LinkReport(link, "computed", None, False, computed, comparison, tuple(warnings))
+    return LinkReport(link, "computed", None, False, computed, comparison, tuple(warnings),
+                      repaired or None)

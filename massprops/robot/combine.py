@@ -9,12 +9,12 @@ solids count twice, as in every simulator: the description's geometry is taken a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from massprops.errors import DegenerateMeshError
+from massprops.errors import DegenerateMeshError, MeshTopologyError
 from massprops.inertia import parallel_axis, principal_axes, rotate_inertia
 from massprops.inspection.file import inspect_mesh
 from massprops.io import read_mesh
@@ -41,6 +41,7 @@ class Part:
     lower: np.ndarray
     upper: np.ndarray
     warnings: tuple[str, ...] = ()
+    repairs: dict | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,8 +73,10 @@ class LinkMass:
 class MeshCache:
     """Meshes read once per file and scale (robot descriptions reuse meshes: left and right)."""
 
-    def __init__(self, allow_open: bool = False) -> None:
+    def __init__(self, allow_open: bool = False, repairs=None) -> None:
+        """repairs : a `massprops.repair.RepairOptions` applied to every mesh, or None."""
         self.allow_open = allow_open
+        self.repairs = repairs
         self._store: dict[tuple, tuple] = {}
 
     def get(self, geom: Geometry):
@@ -98,7 +101,19 @@ class MeshCache:
             mesh = mesh.with_vertices(mesh.vertices * scale)
             if np.prod(np.sign(scale)) < 0:  # a mirror turns the surface inside out
                 mesh = mesh.with_faces(np.ascontiguousarray(mesh.faces[:, ::-1]))
-        return mesh, inspect_mesh(mesh, density=1.0, allow_open=self.allow_open)
+        try:
+            return mesh, inspect_mesh(mesh, density=1.0, allow_open=self.allow_open,
+                                      repairs=self.repairs)
+        except MeshTopologyError as exc:
+            if not geom.hull:
+                raise
+            # the simulator integrates the hull anyway: that is the body it simulates
+            hull = convex_hull(mesh)
+            result = inspect_mesh(hull, density=1.0)
+            note = (f"not a closed solid ({str(exc).split(': ', 1)[-1][:80]}...): its convex "
+                    "hull is integrated, as MuJoCo does for this mesh's inertia mode")
+            return hull, replace(result, health=replace(
+                result.health, warnings=(*result.health.warnings, note)))
 
 
 def integrate_geometry(geom: Geometry, meshes: MeshCache) -> Part:
@@ -113,7 +128,8 @@ def integrate_geometry(geom: Geometry, meshes: MeshCache) -> Part:
         lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
         centre, half = a @ ((lo + hi) / 2) + t, np.abs(a) @ ((hi - lo) / 2)
         return Part(p.volume, a @ p.center_of_mass + t, rotate_inertia(p.inertia, a),
-                    centre - half, centre + half, tuple(result.warnings))
+                    centre - half, centre + half, tuple(result.warnings),
+                    result.repairs_as_dict())
     solid = PRIMITIVES[geom.kind](*geom.dims)
     half = solid.half_extents(a)
     return Part(solid.volume, np.asarray(t, dtype=np.float64), rotate_inertia(solid.inertia, a),
@@ -136,3 +152,24 @@ def combine(parts: list[Part], masses: list[float], total: float | None = None) 
     upper = np.max([p.upper for p in parts], axis=0)
     return LinkMass(whole if total is None else float(total), float(sum(p.volume for p in parts)),
                     com, inertia, moments, axes, float(np.linalg.norm(upper - lower)))
+
+
+def convex_hull(mesh: Mesh) -> Mesh:
+    """The convex hull of ``mesh``'s vertices as a closed mesh, faces turned outward (each
+    facet's winding checked against Qhull's outward plane normal)."""
+    from scipy.spatial import ConvexHull  # only for open MJCF meshes, which MuJoCo hulls
+
+    try:
+        hull = ConvexHull(mesh.vertices)
+    except Exception as exc:  # Qhull's error for flat or degenerate point sets
+        raise DegenerateMeshError(f"{mesh.name}: not closed, and its points span no volume "
+                                  "(no convex hull)") from exc
+    faces = hull.simplices.astype(np.int64)
+    v = mesh.vertices
+    normal = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])
+    inward = np.einsum("ij,ij->i", normal, hull.equations[:, :3]) < 0
+    faces[inward] = faces[inward][:, ::-1]
+    used, inverse = np.unique(faces, return_inverse=True)
+    return Mesh(np.ascontiguousarray(v[used]),
+                np.ascontiguousarray(inverse.reshape(-1, 3).astype(np.int64)),
+                name=f"{mesh.name} (convex hull)")

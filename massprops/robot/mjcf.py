@@ -31,7 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.robot.model import Geometry, Link, RobotModel, StatedInertial
+from massprops.robot.mjcf_tree import expand_includes, replicate_frames, replicate_suffix
+from massprops.robot.model import Geometry, Link, MassRules, RobotModel, StatedInertial
+from massprops.robot.msh import read_msh
 from massprops.robot.poses import (
     axisangle_matrix,
     euler_matrix,
@@ -41,12 +43,11 @@ from massprops.robot.poses import (
 )
 from massprops.robot.uris import resolve_uri
 from massprops.robot.values import Values
-from massprops.robot.xmltree import Node
+from massprops.robot.xmltree import Node, parse_xml
 
 __all__ = ["parse_mjcf"]
 
 _ORIENTATIONS = ("quat", "axisangle", "euler", "xyaxes", "zaxis")
-_UNSUPPORTED = ("include", "replicate", "attach")
 _DEFAULT_DENSITY = 1000.0
 
 
@@ -72,14 +73,43 @@ class _Compiler:
                                      "or false")
         folder = attrs.get("meshdir", attrs.get("assetdir", ""))
         self.meshdir = path.parent / folder
+        self.assetdir = path.parent / attrs.get("assetdir", "")
         self.strippath = attrs.get("strippath", "false") == "true"
         text = attrs.get("inertiagrouprange")
         groups = v.numbers(self.node, text, "inertiagrouprange=", 2, 'inertiagrouprange="0 5"') \
             if text else np.array([0.0, 5.0])
         self.groups = (int(groups[0]), int(groups[1]))
+        self.boundmass = _float(attrs, "boundmass", 0.0, v, self.node)
+        self.boundinertia = _float(attrs, "boundinertia", 0.0, v, self.node)
+        total = _float(attrs, "settotalmass", -1.0, v, self.node)
+        self.settotalmass = total if total > 0 else None
 
     def radians(self, value: float) -> float:
         return math.radians(value) if self.angle == "degree" else value
+
+
+def _float(attrs: dict[str, str], key: str, default: float, v: Values, node: Node) -> float:
+    if key not in attrs:
+        return default
+    return float(v.numbers(node, attrs[key], f"{key}=", 1, f'{key}="0"')[0])
+
+
+def _asset_path(file: str, ctx, node: Node) -> Path:
+    """A model asset's file: relative to ``assetdir`` (else the model's folder)."""
+    p = Path(file)
+    if p.is_absolute():
+        return p
+    folder = ctx.compiler.assetdir
+    return folder / p
+
+
+def _enclosing_childclass(node: Node) -> str:
+    parent = node.parent
+    while parent is not None:
+        if parent.tag in ("body", "frame") and "childclass" in parent.attrs:
+            return parent.attrs["childclass"]
+        parent = parent.parent
+    return "main"
 
 
 class _Defaults:
@@ -111,77 +141,154 @@ class _Defaults:
 
 def parse_mjcf(root: Node, data: bytes, path: Path, *, source: str = "collision",
                package_paths: Sequence[Path] = ()) -> RobotModel:
-    """The bodies of an MJCF model (root ``<mujoco>``)."""
+    """The bodies of an MJCF model (root ``<mujoco>``), its ``<include>`` files spliced in,
+    ``<replicate>`` copies made, ``<attach>`` subtrees read from their own model files."""
     v = Values(path)
     if root.tag != "mujoco":
         raise v.error(root, "expected an MJCF file whose root element is <mujoco>")
-    for node in root.iter():
-        if node.tag in _UNSUPPORTED:
-            raise v.error(node, f"<{node.tag}> is not expanded by massprops; give it the file "
-                                "that holds the bodies (or save the compiled model with "
-                                "mujoco.mj_saveLastXML)")
-    compiler = _Compiler(root, v, path)
-    defaults = _Defaults(root, v)
-    meshes = _meshes(root, defaults, compiler, v, path, package_paths)
+    ctx = _context(root, path, v, package_paths)
+    compiler = ctx.compiler
     warnings = []
     if compiler.fromgeom == "true":
         warnings.append("compiler inertiafromgeom=\"true\": MuJoCo ignores every <inertial>; "
                         "it computes the bodies from their geoms")
     links: list[Link] = []
-    walker = _Walker(compiler, defaults, meshes, v, source, links)
+    walker = _Walker(ctx, source, links, package_paths)
     for body_root in root.findall("worldbody"):
-        walker.children(body_root, "main", (np.eye(3), np.zeros(3)), None)
-    return RobotModel(path, "mjcf", tuple(links), data, tuple(warnings))
+        walker.children(body_root, "main", (np.eye(3), np.zeros(3)), None, ("", ""))
+    rules = MassRules(compiler.boundmass, compiler.boundinertia, compiler.settotalmass)
+    return RobotModel(path, "mjcf", tuple(links), data, tuple(warnings), rules)
+
+
+class _Context:
+    """One model file's compiler settings, default classes, mesh assets and sub-models."""
+
+    def __init__(self, root: Node, path: Path, v: Values,
+                 package_paths: Sequence[Path]) -> None:
+        expand_includes(root, path)
+        self.root, self.path, self.v = root, path, v
+        self.compiler = _Compiler(root, v, path)
+        self.defaults = _Defaults(root, v)
+        self.meshes = _meshes(root, self.defaults, self.compiler, v, path, package_paths)
+        self.models = {}
+        for asset in root.findall("asset"):
+            for node in asset.findall("model"):
+                name, file = node.attrs.get("name"), node.attrs.get("file")
+                if not (name and file):
+                    raise v.error(node, 'an asset <model> needs name="..." and file="..."')
+                self.models[name] = (node, file)
+
+
+def _context(root: Node, path: Path, v: Values, package_paths: Sequence[Path]) -> _Context:
+    return _Context(root, path, v, package_paths)
 
 
 class _Walker:
     """Depth-first over bodies (MuJoCo's id order), collecting geoms through frames."""
 
-    def __init__(self, compiler, defaults, meshes, v, source, links) -> None:
-        self.compiler, self.defaults, self.meshes, self.v = compiler, defaults, meshes, v
-        self.source, self.links = source, links
+    def __init__(self, ctx: _Context, source, links, package_paths) -> None:
+        self.ctx, self.source, self.links = ctx, source, links
+        self.package_paths = package_paths
         self.next_id = 1
+        self.sub_models: dict[str, _Context] = {}
 
-    def children(self, node: Node, childclass: str, frame, geoms: list | None) -> None:
+    @property
+    def v(self) -> Values:
+        return self.ctx.v
+
+    def children(self, node: Node, childclass: str, frame, geoms: list | None,
+                 affix: tuple[str, str]) -> None:
         """Walk ``node``'s children: geoms go to ``geoms`` (None: the world's, dropped) in
-        ``frame`` (the pose of ``node``'s frame in the body frame); bodies start a link."""
+        ``frame`` (the pose of ``node``'s frame in the body frame); bodies start a link whose
+        name is ``affix[0] + name + affix[1]`` (attach prefix, replicate suffix)."""
+        ctx = self.ctx
         for child in node.children:
             if child.tag == "body":
-                self.body(child, child.attrs.get("childclass", childclass))
+                self.body(child, child.attrs.get("childclass", childclass), affix)
             elif child.tag == "frame":
-                attrs = self.defaults.attrs(child, childclass) if "class" in child.attrs else \
+                attrs = ctx.defaults.attrs(child, childclass) if "class" in child.attrs else \
                     child.attrs
-                inner = _compose(frame, _pose(attrs, child, self.compiler, self.v))
-                self.children(child, child.attrs.get("childclass", childclass), inner, geoms)
+                inner = _compose(frame, _pose(attrs, child, ctx.compiler, self.v))
+                self.children(child, child.attrs.get("childclass", childclass), inner, geoms,
+                              affix)
+            elif child.tag == "replicate":
+                self.replicate(child, childclass, frame, geoms, affix)
+            elif child.tag == "attach":
+                self.attach(child, affix)
             elif child.tag == "geom" and geoms is not None:
                 geom = self.geom(child, childclass, frame)
                 if geom is not None:
                     geoms.append(geom)
 
-    def body(self, node: Node, childclass: str) -> None:
+    def replicate(self, node: Node, childclass: str, frame, geoms, affix) -> None:
+        v = self.v
+        count = v.number(node, "count")
+        if count is None or count != int(count) or count < 1:
+            raise v.error(node, f"count={node.attrs.get('count')!r}: expected a whole number "
+                                ">= 1")
+        offset = v.attr(node, "offset", 3, [0, 0, 0])
+        angles = v.attr(node, "euler", 3, [0, 0, 0])
+        compiler = self.ctx.compiler
+        rotation = euler_matrix([compiler.radians(e) for e in angles], compiler.eulerseq)
+        sep = node.attrs.get("sep", "")
+        for i, pose in enumerate(replicate_frames(int(count), rotation, offset)):
+            suffix = replicate_suffix(int(count), i, sep) + affix[1]
+            self.children(node, childclass, _compose(frame, pose), geoms, (affix[0], suffix))
+
+    def attach(self, node: Node, affix) -> None:
+        """``<attach model body prefix>``: the named body of another model file, its subtree
+        read with that file's compiler, defaults and assets, every name prefixed."""
+        v, ctx = self.v, self.ctx
+        name, body = node.attrs.get("model"), node.attrs.get("body")
+        if name not in ctx.models:
+            raise v.error(node, f"model={name!r}: no <asset><model name=...> of that name")
+        if not body:
+            raise v.error(node, 'massprops attaches one body: give body="..."')
+        model_node, file = ctx.models[name]
+        if name not in self.sub_models:
+            sub_path = _asset_path(file, ctx, model_node)
+            root, _ = parse_xml(sub_path)
+            self.sub_models[name] = _Context(root, sub_path, Values(sub_path),
+                                             self.package_paths)
+        sub = self.sub_models[name]
+        found = [b for b in sub.root.iter("body") if b.attrs.get("name") == body]
+        if not found:
+            raise v.error(node, f"body={body!r}: no such body in {sub.path}")
+        outer, self.ctx = self.ctx, sub
+        try:
+            start = found[0]
+            klass = start.attrs.get("childclass", _enclosing_childclass(start))
+            self.body(start, klass, (affix[0] + node.attrs.get("prefix", ""), affix[1]))
+        finally:
+            self.ctx = outer
+
+    def body(self, node: Node, childclass: str, affix=("", "")) -> None:
         body_id = self.next_id
         self.next_id += 1
         geoms: list[Geometry] = []
         warnings: list[str] = []
         inertial = node.find("inertial")
         stated = None
+        compiler = self.ctx.compiler
         if inertial is not None:
-            if self.compiler.fromgeom == "true":
+            if compiler.fromgeom == "true":
                 warnings.append(f"<inertial> (line {inertial.line}) is ignored by MuJoCo "
                                 "(inertiafromgeom=true)")
             else:
-                stated = _stated(inertial, self.compiler, self.v)
-        name = node.attrs.get("name") or f"body#{body_id}"
+                stated = _stated(inertial, compiler, self.v)
+        own = node.attrs.get("name")
+        name = affix[0] + own + affix[1] if own else f"body#{body_id}"
         # a link's own entry goes in before its children's, so the order is MuJoCo's id order
         at = len(self.links)
-        self.children(node, childclass, (np.eye(3), np.zeros(3)), geoms)
+        self.children(node, childclass, (np.eye(3), np.zeros(3)), geoms, affix)
         self.links.insert(at, Link(name, node, stated, tuple(geoms), inertial, tuple(warnings)))
 
     def geom(self, node: Node, childclass: str, frame) -> Geometry | None:
-        a = self.defaults.attrs(node, childclass)
+        a = self.ctx.defaults.attrs(node, childclass)
         v = self.v
+        compiler = self.ctx.compiler
         group = int(float(a.get("group", "0")))
-        lo, hi = self.compiler.groups
+        lo, hi = compiler.groups
         if self.source == "visual":
             if not (a.get("contype", "1").strip() == "0" and a.get("conaffinity", "1").strip()
                     == "0"):
@@ -191,9 +298,11 @@ class _Walker:
         kind = a.get("type", "sphere")
         density = float(a.get("density", _DEFAULT_DENSITY))
         mass = float(a["mass"]) if "mass" in a else None
+        if (mass if mass is not None else density) == 0:
+            return None  # a massless geom (a decoration, a camera box): no part of the body
         size = v.numbers(node, a["size"], "size=", (1, 2, 3), 'size="0.1 0.2 0.3"') \
             if "size" in a else np.zeros(0)
-        pose = _pose(a, node, self.compiler, v)
+        pose = _pose(a, node, compiler, v)
         common = {"node": node, "density": density, "mass": mass}
         if "fromto" in a and kind in ("capsule", "cylinder", "box", "ellipsoid"):
             ends = v.numbers(node, a["fromto"], "fromto=", 6, 'fromto="0 0 0 0 0 1"')
@@ -221,9 +330,9 @@ class _Walker:
             return Geometry(kind, dims=tuple(s), **common)
         if kind == "mesh":
             name = a.get("mesh")
-            if name not in self.meshes:
+            if name not in self.ctx.meshes:
                 raise v.error(node, f"mesh={name!r}: no <mesh> asset of that name")
-            mesh = self.meshes[name]
+            mesh = self.ctx.meshes[name]
             warning = None
             if mesh["inertia"] == "shell":
                 mesh["problem"] = (f"<mesh name={name!r} inertia=\"shell\">: a hollow shell is "
@@ -234,7 +343,8 @@ class _Walker:
                            "to the <mesh> to make MuJoCo agree on a non-convex mesh)")
             return Geometry("mesh", path=mesh["path"], uri=mesh["uri"], scale=mesh["scale"],
                             problem=mesh["problem"], vertices=mesh["vertices"],
-                            faces=mesh["faces"], warning=warning, **common)
+                            faces=mesh["faces"], warning=warning,
+                            hull=mesh["inertia"] in ("convex", "legacy"), **common)
         return Geometry(kind, problem=f"geom type {kind!r} (line {node.line}) has no volume "
                                       "massprops can integrate", **common)
 
@@ -319,6 +429,8 @@ def _meshes(root: Node, defaults: _Defaults, compiler: _Compiler, v: Values, pat
                 ref = Path(file).name if compiler.strippath else file
                 entry["path"], entry["problem"] = resolve_uri(ref, compiler.meshdir, path,
                                                               package_paths)
+                if entry["problem"] is None and entry["path"].suffix.lower() == ".msh":
+                    read_msh(entry)
             else:
                 entry["problem"] = (f"<mesh name={name!r}> (line {node.line}) has no file= "
                                     "(a vertex-only mesh is MuJoCo's convex hull: not supported)")

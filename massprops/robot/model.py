@@ -13,7 +13,7 @@ import numpy as np
 
 from massprops.robot.xmltree import Node
 
-__all__ = ["Geometry", "Link", "RobotModel", "StatedInertial"]
+__all__ = ["Geometry", "Link", "MassRules", "RobotModel", "StatedInertial", "pick_source"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,6 +47,9 @@ class Geometry:
         None. A link with a problem is skipped and counted as an input error.
     vertices, faces : an inline mesh (MJCF ``<mesh vertex= face=>``), else None.
     warning : a remark about how a simulator treats it (not an error), or None.
+    hull : the simulator integrates this mesh's convex hull (MJCF mesh inertia "convex", and
+        "legacy" for a convex mesh): a mesh that is not a closed solid is then taken as its hull,
+        with a warning, instead of being refused.
     node : the element it came from (line numbers).
     """
 
@@ -64,6 +67,7 @@ class Geometry:
     vertices: np.ndarray | None = None
     faces: np.ndarray | None = None
     warning: str | None = None
+    hull: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,6 +78,8 @@ class Link:
     node : its element. stated : its inertial, or None. geometries : what it is made of (the
     collision or visual set, as asked). warnings : remarks about the description (not errors).
     inertial_node : the element to replace on write-back (None: insert a new one).
+    source : which geometry ``geometries`` is: "collision" or "visual" (with ``--from auto``, a
+        link with no collision element falls back to its visual ones).
     """
 
     name: str
@@ -82,15 +88,44 @@ class Link:
     geometries: tuple[Geometry, ...]
     inertial_node: Node | None = None
     warnings: tuple[str, ...] = ()
+    source: str = "collision"
+
+
+@dataclass(frozen=True)
+class MassRules:
+    """How a simulator's compiler changes every body's inertial after reading it (MJCF
+    ``<compiler>``): ``boundmass`` kg, the least mass of a body; ``boundinertia`` kg·m², the
+    least principal moment; then ``settotalmass`` kg (or None) scales every mass and inertia so
+    that they sum to it (MuJoCo 4.0: bounds first, then the scale; checked against its compiled
+    ``body_mass``)."""
+
+    boundmass: float = 0.0
+    boundinertia: float = 0.0
+    settotalmass: float | None = None
+
+    @property
+    def any(self) -> bool:
+        return self.boundmass > 0 or self.boundinertia > 0 or self.settotalmass is not None
 
 
 @dataclass(frozen=True, eq=False)
 class RobotModel:
     """A parsed description: ``format`` is "urdf", "sdf" or "mjcf"; ``data`` the file's bytes
-    (write-back edits them); ``warnings`` concern the whole model."""
+    (write-back edits them); ``warnings`` concern the whole model; ``rules`` the compiler's
+    changes to every inertial (MJCF)."""
 
     path: Path
     format: str
     links: tuple[Link, ...]
     data: bytes
     warnings: tuple[str, ...] = ()
+    rules: MassRules = field(default_factory=MassRules)
+
+
+def pick_source(source: str, collisions: list, visuals: list) -> str:
+    """Which geometry elements make a link: ``source`` "collision" or "visual" as asked; "auto"
+    takes the collision elements, or the visual ones for a link that has no collision element
+    (what a user means for a link drawn but never collided)."""
+    if source != "auto":
+        return source
+    return "visual" if not collisions and visuals else "collision"

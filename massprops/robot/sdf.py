@@ -22,8 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.robot.model import Geometry, Link, RobotModel, StatedInertial
+from massprops.robot.model import Geometry, Link, RobotModel, StatedInertial, pick_source
 from massprops.robot.poses import quat_matrix, rpy_matrix
+from massprops.robot.sdf_include import expand_sdf_includes
 from massprops.robot.uris import resolve_uri
 from massprops.robot.values import Values
 from massprops.robot.xmltree import Node
@@ -42,12 +43,10 @@ def parse_sdf(root: Node, data: bytes, path: Path, *, source: str = "collision",
     v = Values(path)
     if root.tag != "sdf":
         raise v.error(root, "expected an SDF file whose root element is <sdf>")
+    expand_sdf_includes(root, path, package_paths)
     models = [m for m in root.iter("model")]
     if not models:
         raise v.error(root, "no <model> found; nothing to compute")
-    for inc in root.iter("include"):
-        raise v.error(inc, "<include> is not expanded by massprops; run `gz sdf -p file.sdf > "
-                           "flat.sdf` and give it the flattened file")
     links = []
     for model in models:
         prefix = _scope(model)
@@ -60,12 +59,13 @@ def parse_sdf(root: Node, data: bytes, path: Path, *, source: str = "collision",
             inertial = node.find("inertial")
             stated = _stated(inertial, v, warnings) if inertial is not None else None
             geoms = []
-            for element in node.findall(source):
+            used = pick_source(source, node.findall("collision"), node.findall("visual"))
+            for element in node.findall(used):
                 geom = _geometry(element, name, frames, v, path, package_paths, warnings)
                 if geom is not None:
                     geoms.append(geom)
             links.append(Link(prefix + name, node, stated, tuple(geoms), inertial,
-                              tuple(warnings)))
+                              tuple(warnings), source=used))
     return RobotModel(path, "sdf", tuple(links), data)
 
 
@@ -228,7 +228,8 @@ def _geometry(element: Node, link: str, frames: _FrameGraph, v: Values, path: Pa
         if not uri:
             raise v.error(shape, "a <mesh> needs a <uri>")
         scale = v.child_text(shape, "scale", 3, [1, 1, 1], "<scale>0.001 0.001 0.001</scale>")
-        resolved, problem = resolve_uri(uri, path.parent, path, package_paths)
+        origin = shape.file or path   # a mesh of an included model: relative to its file
+        resolved, problem = resolve_uri(uri, origin.parent, origin, package_paths)
         if shape.find("submesh") is not None:
             problem = (f"<submesh> (line {shape.find('submesh').line}) is not supported; "
                        "export the submesh to its own file")

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.robot.model import Geometry, Link, RobotModel, StatedInertial
+from massprops.robot.model import Geometry, Link, RobotModel, StatedInertial, pick_source
 from massprops.robot.poses import rpy_matrix
 from massprops.robot.uris import resolve_uri
 from massprops.robot.values import Values
@@ -27,7 +27,8 @@ __all__ = ["parse_urdf"]
 
 def parse_urdf(root: Node, data: bytes, path: Path, *, source: str = "collision",
                package_paths: Sequence[Path] = ()) -> RobotModel:
-    """The links of a URDF whose root element is ``root``; ``source`` "collision" or "visual"."""
+    """The links of a URDF whose root element is ``root``; ``source`` "collision", "visual" or
+    "auto" (collision, else visual: `model.pick_source`)."""
     v = Values(path)
     if root.tag != "robot":
         raise v.error(root, "expected a URDF whose root element is <robot>; is this an SDF "
@@ -43,9 +44,11 @@ def parse_urdf(root: Node, data: bytes, path: Path, *, source: str = "collision"
             raise v.error(node, f"link name {name!r} is used twice; link names must be unique")
         names.add(name)
         inertial = node.find("inertial")
-        geoms = tuple(_geometry(el, v, path, package_paths) for el in node.findall(source))
+        used = pick_source(source, node.findall("collision"), node.findall("visual"))
+        geoms = tuple(_geometry(el, v, path, package_paths)
+                      for el in node.findall(used))
         links.append(Link(name, node, _stated(inertial, v) if inertial else None, geoms,
-                          inertial))
+                          inertial, source=used))
     _check_tree(root, names, v)
     return RobotModel(path, "urdf", tuple(links), data)
 

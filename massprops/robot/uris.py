@@ -1,11 +1,17 @@
 """Where a mesh reference points: ``package://``, ``model://``, ``file://`` and plain paths.
 
-``package://PKG/rest`` is looked up, in order, in: a folder named PKG among the description
-file's folder and its parents (the usual PKG/urdf/robot.urdf layout), then PKG inside each
-``--package-path`` folder and each ``ROS_PACKAGE_PATH`` entry (a listed folder that is itself
-named PKG counts too). ``model://NAME/rest`` likewise, with ``GZ_SIM_RESOURCE_PATH`` and
-``GAZEBO_MODEL_PATH`` added to the search path. A plain relative path is relative to ``base``
-(the description's folder, or MJCF's meshdir).
+The resolution rule:
+- ``package://PKG/rest`` is looked up, in order, in: a folder named PKG among the description
+  file's folder and its parents (the usual PKG/urdf/robot.urdf layout), then PKG inside each
+  ``--package-path`` folder and each ``ROS_PACKAGE_PATH`` entry (a listed folder that is itself
+  named PKG counts too). ``package:///PKG/rest`` (three slashes, an empty host, as some
+  exporters write it) is the same reference: the first path segment is the package.
+- ``model://NAME/rest`` likewise, with ``GZ_SIM_RESOURCE_PATH``, ``IGN_GAZEBO_RESOURCE_PATH``,
+  ``SDF_PATH`` and ``GAZEBO_MODEL_PATH`` added to the search path (after ``--package-path``).
+- ``file:///abs/path`` (or ``file://localhost/abs/path``) is that absolute path;
+  ``file://rel/path`` (a host that is not localhost, as some tools write a relative path) and a
+  plain relative path are relative to ``base`` (the folder of the file holding the reference, or
+  MJCF's meshdir); an absolute path is itself. Percent escapes (``%20``) are decoded in URIs.
 """
 
 from __future__ import annotations
@@ -20,7 +26,8 @@ from massprops.errors import setting_ref
 __all__ = ["resolve_uri"]
 
 _ENV = {"package": ("ROS_PACKAGE_PATH",),
-        "model": ("ROS_PACKAGE_PATH", "GZ_SIM_RESOURCE_PATH", "GAZEBO_MODEL_PATH")}
+        "model": ("ROS_PACKAGE_PATH", "GZ_SIM_RESOURCE_PATH", "IGN_GAZEBO_RESOURCE_PATH",
+                  "SDF_PATH", "GAZEBO_MODEL_PATH")}
 
 
 def resolve_uri(uri: str, base: Path, description: Path,
@@ -37,11 +44,15 @@ def resolve_uri(uri: str, base: Path, description: Path,
         return (p if p.is_absolute() else base / p), None
     scheme = scheme.lower()
     if scheme == "file":
-        return Path(unquote(urlparse(uri).path)), None
+        parsed = urlparse(uri)
+        host = parsed.netloc
+        if host in ("", "localhost"):
+            return Path(unquote(parsed.path)), None
+        return base / unquote(host + parsed.path), None
     if scheme not in _ENV:
         return None, (f"cannot resolve {uri!r}: unknown scheme {scheme}://; use a path, "
                       "package:// or model://")
-    package, _, inner = rest.partition("/")
+    package, _, inner = unquote(rest).lstrip("/").partition("/")
     roots = _roots(scheme, description, package_paths)
     for folder in roots:
         if folder.name == package and folder.is_dir():

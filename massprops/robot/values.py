@@ -20,7 +20,8 @@ class Values:
         self.path = path
 
     def error(self, node: Node, problem: str) -> RobotModelError:
-        return RobotModelError(f"{self.path}:{node.line}: <{node.tag}>: {problem}")
+        where = node.file if node.file is not None else self.path
+        return RobotModelError(f"{where}:{node.line}: <{node.tag}>: {problem}")
 
     def numbers(self, node: Node, text: str, what: str, count: int | tuple[int, ...],
                 example: str) -> np.ndarray:

@@ -14,7 +14,7 @@ from xml.parsers import expat
 
 from massprops.errors import MeshFileError, RobotModelError
 
-__all__ = ["Node", "parse_xml"]
+__all__ = ["Node", "parse_xml", "parse_xml_bytes"]
 
 
 @dataclass(eq=False)
@@ -28,6 +28,8 @@ class Node:
     end : byte offset just after the element (after ``</tag>``, or ``head_end`` for ``<tag/>``).
     text : the character data directly inside it, concatenated (children's text excluded).
     children : child elements in document order. parent : None for the root.
+    file : the file it was read from (an MJCF ``<include>`` splices in another file's nodes;
+        their lines and byte spans are that file's).
     """
 
     tag: str
@@ -40,6 +42,7 @@ class Node:
     text: str = ""
     children: list[Node] = field(default_factory=list)
     parent: Node | None = None
+    file: Path | None = None
 
     @property
     def self_closing(self) -> bool:
@@ -80,9 +83,14 @@ def parse_xml(path: str | os.PathLike) -> tuple[Node, bytes]:
     return _Builder(data, str(p)).run(), data
 
 
+def parse_xml_bytes(data: bytes, name: str) -> Node:
+    """Parse XML held in memory (e.g. xacro's output); messages and ``Node.file`` say ``name``."""
+    return _Builder(data, name).run()
+
+
 class _Builder:
     def __init__(self, data: bytes, name: str) -> None:
-        self.data, self.name = data, name
+        self.data, self.name, self.path = data, name, Path(name)
         self.stack: list[Node] = []
         self.root: Node | None = None
         self.parser = expat.ParserCreate()
@@ -93,9 +101,14 @@ class _Builder:
         self.parser.CharacterDataHandler = self._text
 
     def run(self) -> Node:
+        self.data = _declaration_first(self.data)
         try:
             self.parser.Parse(self.data, True)
         except expat.ExpatError as exc:
+            if self.root is not None and self.root.end >= 0:
+                # bytes after the root element closed (stray text some exporters append):
+                # the description itself is complete, as ROS's and pybullet's readers accept
+                return self.root
             raise RobotModelError(
                 f"{self.name}:{exc.lineno}: malformed XML at column {exc.offset}: "
                 f"{expat.ErrorString(exc.code)}; fix the file (an XML validator shows the "
@@ -108,7 +121,8 @@ class _Builder:
     def _start(self, tag: str, attrs: dict[str, str]) -> None:
         p = self.parser
         start = p.CurrentByteIndex
-        node = Node(tag, dict(attrs), p.CurrentLineNumber, p.CurrentColumnNumber, start)
+        node = Node(tag, dict(attrs), p.CurrentLineNumber, p.CurrentColumnNumber, start,
+                    file=self.path)
         node.head_end = _tag_end(self.data, start)
         if self.stack:
             node.parent = self.stack[-1]
@@ -127,6 +141,20 @@ class _Builder:
     def _text(self, text: str) -> None:
         if self.stack:
             self.stack[-1].text += text
+
+
+def _declaration_first(data: bytes) -> bytes:
+    """The XML declaration moved over the blank lines some files put before it: expat refuses
+    a declaration that is not the first thing in the file. It is blanked out (replaced by
+    spaces, so every byte offset and line number stays) when only whitespace precedes it."""
+    stripped = data.lstrip()
+    if stripped is data or not stripped.startswith(b"<?xml"):
+        return data
+    end = stripped.find(b"?>")
+    if end < 0:
+        return data
+    start = len(data) - len(stripped)
+    return data[:start] + b" " * (end + 2) + data[start + end + 2:]
 
 
 def _tag_end(data: bytes, at: int) -> int:

@@ -1,0 +1,76 @@
+"""xacro: a ``.xacro`` description expanded by the ``xacro`` package (pure Python, on PyPI).
+
+``expand_xacro(path, args)`` runs xacro on the file with ``args`` (``name:=value`` mappings, as
+``xacro file name:=value`` takes them) and returns the expanded URDF's bytes. ``$(find PKG)``
+resolves as ``package://PKG`` does (`uris`): an ancestor folder named PKG, ``--package-path``,
+``ROS_PACKAGE_PATH``, so no ROS installation is needed. Line numbers of later errors refer to
+the expanded text, which is why the parsed nodes carry the name ``FILE (expanded by xacro)``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+from massprops.errors import MassPropsError, RobotModelError
+
+__all__ = ["EXPANDED", "expand_xacro", "has_xacro", "is_xacro"]
+
+EXPANDED = " (expanded by xacro)"
+"""Appended to the file name in messages about the expanded text (its line numbers)."""
+
+
+def is_xacro(path: Path) -> bool:
+    return path.suffix.lower() == ".xacro"
+
+
+def has_xacro(root) -> bool:
+    """Whether a parsed description (`xmltree.Node`) still holds xacro elements or ``${...}`` /
+    ``$(...)`` expressions."""
+    return any(node.tag.startswith("xacro:") or any("${" in a or "$(" in a
+                                                    for a in node.attrs.values())
+               for node in root.iter())
+
+
+def expand_xacro(path: Path, args: Mapping[str, str] | None = None,
+                 package_paths: Sequence[Path] = ()) -> bytes:
+    """The URDF that xacro makes of ``path`` with ``args``, as UTF-8 bytes.
+
+    Raises MassPropsError (exit 1) with the install hint when xacro is missing, RobotModelError
+    naming the file when xacro refuses it.
+    """
+    try:
+        import xacro  # optional at import time: only .xacro inputs need it
+        import xacro.substitution_args as substitution
+    except ImportError as exc:
+        raise MassPropsError(f"{path}: reading .xacro needs the xacro package: pip install "
+                             "xacro") from exc
+    with _find_packages(substitution, path, package_paths):
+        try:
+            doc = xacro.process_file(str(path), mappings=dict(args or {}))
+        except Exception as exc:  # xacro raises XacroException, its own and the XML parser's
+            text = " ".join(str(exc).split()) or type(exc).__name__
+            raise RobotModelError(f"{path}: xacro failed: {text}; fix the file or give the "
+                                  "missing argument with --xacro-arg NAME:=VALUE") from exc
+    return doc.toprettyxml(indent="  ", encoding="utf-8")
+
+
+@contextlib.contextmanager
+def _find_packages(module, path: Path, package_paths: Sequence[Path]):
+    """``$(find PKG)`` through massprops' package search while xacro runs (restored after)."""
+    from massprops.robot.uris import resolve_uri  # the only user of the search here
+
+    def find(package: str) -> str:
+        folder, problem = resolve_uri(f"package://{package}/", path.parent, path, package_paths)
+        if problem:
+            raise RobotModelError(f"{path}: $(find {package}): {problem}")
+        return str(folder).rstrip("/")
+
+    saved, saved_eval = module._eval_find, module._eval_dict.get("find")
+    module._eval_find = module._eval_dict["find"] = find
+    try:
+        yield
+    finally:
+        module._eval_find = saved
+        module._eval_dict["find"] = saved_eval
