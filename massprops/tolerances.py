@@ -78,3 +78,17 @@ scale. Scene files carry ~10-17 digits, so a state typed from a closed form (sqr
 with 10 digits) passes, while any real mistake (a sign, a swapped axis, a metre off) fails with
 a message giving the consistent value. What passes is projected silently: the run always starts
 exactly on the joints."""
+
+CONSTRAINT_RANK_RTOL = 1e-8
+"""Singular values of a system's mass-weighted constraint Jacobian G M^(-1/2) below this
+fraction of the largest count as zero: the constraint they belong to repeats others (a planar
+four-bar of four revolutes in space has three such). Round-off leaves a repeated constraint's
+singular value at ~1e-16 of the largest; a true one of a non-degenerate pose stays above ~1e-3
+(unless the mechanism nears a singular pose, which is reported when its rank drops). 1e-8 sits
+in the middle of that gap on the log scale."""
+
+PROJECTION_ATOL_ULPS = 64
+"""A system's positions and velocities are projected onto Φ = 0 and Φ̇ = 0 until the residual
+is within this many ulps of the system size (positions, m) or of its speed scale (velocities):
+a few Newton iterations from an integrator step's O(rtol) drift reach it; the round-off of
+evaluating Φ itself (a sum of a few products of size-scale numbers) is ~10 ulps."""
