@@ -101,6 +101,9 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             from massprops.dynamics.plots import require_matplotlib
 
             require_matplotlib()
+        if _is_system(scene_path):  # a `bodies:` scene: the systems package runs it
+            _simulate_system(scene_path, as_json, output_path, integrator, rtol, every, force)
+            return
         scene = load_scene(scene_path)
         for w in scene.warnings:
             say_warning(scene.body_source, w)
@@ -199,3 +202,46 @@ def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
         from massprops.dynamics.plots import plot_simulation
 
         plot_simulation(result, plot_path, force=force, protect=protect)
+
+
+def _is_system(scene_path: str) -> bool:
+    from massprops.dynamics.systems.scene import is_system_text
+
+    try:
+        with open(scene_path, encoding="utf-8-sig") as handle:
+            return is_system_text(handle.read())
+    except (OSError, UnicodeDecodeError):  # the one-body reader reports it
+        return False
+
+
+def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
+                     integrator: str | None, rtol: float | None, every: float | None,
+                     force: bool) -> None:
+    """A system scene: run, write the trajectory, print JSON or a short summary."""
+    from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
+    from massprops.dynamics.systems.scene import load_system
+
+    scene = load_system(scene_path)
+    for w in scene.warnings:
+        say_warning(scene_path, w)
+    out = output_path or scene.output.file
+    sampling = every or scene.output.every
+    if sampling is None and out:
+        sampling = scene.time.duration / 1000
+    result = simulate_system(scene, integrator=integrator, rtol=rtol, every=sampling)
+    for note in result.notes:
+        click.echo(f"massprops: warning: {note}", err=True)
+    if out:
+        write_system_trajectory(result, out, force=force,
+                                protect=[scene_path, *scene.input_files])
+    data = result.as_dict()
+    if as_json:
+        emit_json(data)
+        return
+    diag = data["diagnostics"]
+    click.echo(f"{scene_path}: {len(scene.bodies)} bodies, {len(scene.joints)} joints, "
+               f"{diag['degrees_of_freedom']} degrees of freedom; t = {data['final']['t']:g} s "
+               f"in {data['steps']} steps; error estimate {diag['error_estimate']}")
+    for name, joint in data["final"]["joints"].items():
+        click.echo(f"  {name} ({joint['type']}): q = {joint['coordinates']}, "
+                   f"force {joint['force']} N, torque {joint['torque']} N·m")
