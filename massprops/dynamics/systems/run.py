@@ -157,6 +157,7 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
         "degrees_of_freedom": system.nv - system.rank,
         "redundant_constraints": system.m - system.rank,
         "projection": {"position": run.moved_q, "velocity": run.moved_u},
+        "singularity_margin": system.margin if system.m else None,
         "reactions": ("unique" if system.m == system.rank else
                       "minimum-norm multipliers: the redundant constraints' reactions are not "
                       "unique; the smallest set of loop forces is reported"),

@@ -56,6 +56,7 @@ class System:
         self.spring_local = [[_local(bodies, s.a, s.points[0]), _local(bodies, s.b, s.points[1])]
                              for s in scene.springs]
         self.rank: int | None = None  # of G at the start; a drop later is a singular pose
+        self.margin = 1.0  # smallest σ_min / σ_max of G M^(-1/2) kept over the run so far
         self.time = 0.0
 
     # --- loads ----------------------------------------------------------------------------------
@@ -124,6 +125,8 @@ class System:
             uu, sv, _ = np.linalg.svd(b, full_matrices=False)
             keep = sv > tolerances.CONSTRAINT_RANK_RTOL * (sv[0] if sv.size else 0.0)
             rank = int(keep.sum())
+            if check and rank:
+                self.margin = min(self.margin, float(sv[rank - 1] / sv[0]))
             free = np.linalg.solve(chol.T, np.linalg.solve(chol, rhs))
             r = -gdot - g @ free
             coef = uu[:, keep].T @ r / sv[keep] ** 2

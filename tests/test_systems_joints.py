@@ -1,0 +1,128 @@
+"""Systems with spherical, free, universal and redundant joints against independent truth: the
+one-body closed forms (Lagrange top, torque-free body), conservation, and reactions that do no
+work along a joint's free axes."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from massprops.dynamics.scene import load_scene
+from massprops.dynamics.simulate import simulate
+from massprops.dynamics.systems.run import simulate_system
+from massprops.dynamics.systems.scene import parse_system
+from massprops.rotation import quat_to_matrix, rotation_angle_between
+
+SAMPLES = Path(__file__).resolve().parent.parent / "sample_scenes"
+ROD = "{mass: 1.0, inertia: [[0.0834, 0, 0], [0, 0.0834, 0], [0, 0, 0.001]], "
+
+
+def _system(text: str, every: float, rtol: float = 1e-11):
+    scene = parse_system(text, source="t.yaml", base_dir=SAMPLES)
+    return simulate_system(scene, rtol=rtol, every=every, estimate=False)
+
+
+def _vec(v) -> str:
+    return "[" + ", ".join(repr(float(x)) for x in v) + "]"
+
+
+def _one_body(name: str, duration: float, every: float):
+    scene = load_scene(SAMPLES / name)
+    scene = dataclasses.replace(scene, time=dataclasses.replace(scene.time, duration=duration))
+    return scene, simulate(scene, every=every)  # auto: the closed form, no compiler needed
+
+
+def test_heavy_top_on_a_spherical_joint_equals_lagrange_closed_form():
+    scene, ref = _one_body("heavy_top.yaml", 0.5, 0.1)
+    q = scene.initial.orientation
+    a = quat_to_matrix(q)
+    body = scene.body
+    com = a @ (body.center_of_mass - np.array([0.0, 0.0, -1.0]))
+    rate = a @ np.array([0.0, 0.0, 30.0])
+    text = (f"bodies:\n  top: {{mesh: ../sample_meshes/prism.obj, density: 1.0, position: "
+            f"{_vec(com)}, orientation: {_vec(q)}}}\n"
+            "joints:\n  - {name: tip, type: spherical, bodies: [world, top], point: [0, 0, 0]}\n"
+            f"initial: {{rates: {{tip: {_vec(rate)}}}}}\n"
+            "forces: [{type: gravity, g: [0, 0, -9.81]}]\ntime: {duration: 0.5}\n")
+    s = _system(text, every=0.1).samples
+    traj = ref.trajectory
+    assert np.max(np.abs(s.position[:, 0] - traj.position)) < 1e-8
+    assert np.max(rotation_angle_between(s.orientation[:, 0], traj.orientation)) < 1e-8
+    assert np.max(np.abs(s.angular_velocity[:, 0] - traj.angular_velocity)) < 1e-7 * 30
+    force = traj.joints[0].force_world
+    assert np.max(np.abs(s.force[:, 0] - force)) < 1e-6 * np.max(np.abs(force))
+    # the tip's coordinates: a unit quaternion, its rates the angular velocity (world frame)
+    assert np.allclose(np.linalg.norm(s.coordinates[0], axis=1), 1.0, atol=1e-14)
+    assert np.allclose(s.rates[0], s.angular_velocity[:, 0], atol=1e-12)
+
+
+def test_floating_body_equals_torque_free_closed_form():
+    scene, ref = _one_body("dzhanibekov.yaml", 2.0, 0.25)
+    w = np.array([-3.2, 9.0, 2.8])
+    text = ("bodies:\n  t: {mesh: ../sample_meshes/tetrahedron.obj, density: 1.0, "
+            "position: [0, 0, 0]}\n"
+            f"initial: {{bodies: {{t: {{velocity: [0.1, 0, 0], angular_velocity: {_vec(w)}}}}}}}\n"
+            "time: {duration: 2.0}\n")
+    # the flip near the intermediate axis amplifies step errors: a tight tolerance
+    s = _system(text, every=0.25, rtol=1e-13).samples
+    traj = ref.trajectory
+    assert np.max(rotation_angle_between(s.orientation[:, 0], traj.orientation)) < 1e-8
+    assert np.max(np.abs(s.angular_velocity[:, 0] - traj.angular_velocity)) < 1e-8 * 10
+    assert np.allclose(s.position[:, 0, 0], 0.1 * s.t, atol=1e-12)  # free drift, no force
+
+
+def test_universal_joint_reaction_does_no_work_on_its_axes():
+    text = (f"bodies:\n  rod: {ROD}position: [0, 0, -0.5]}}\n"
+            "joints:\n  - {name: u, type: universal, bodies: [world, rod], point: [0, 0, 0], "
+            "axes: [[1, 0, 0], [0, 1, 0]]}\n"
+            "initial: {positions: {u: [0.5, 0.3]}, rates: {u: [0.0, 2.0]}}\n"
+            "forces: [{type: gravity, g: [0, 0, -9.81]}]\ntime: {duration: 1.0}\n")
+    result = _system(text, every=0.05)
+    s = result.samples
+    assert result.diagnostics["energy_rel_drift"] < 1e-9
+    assert result.diagnostics["degrees_of_freedom"] == 2
+    q0 = s.coordinates[0][:, 0]
+    for k in range(len(s.t)):
+        a0 = np.array([1.0, 0, 0])  # fixed in the world
+        a1 = quat_to_matrix(s.orientation[k, 0]) @ np.array([0, 1.0, 0])  # carried by the rod
+        assert abs(s.torque[k, 0] @ a0) < 1e-9 and abs(s.torque[k, 0] @ a1) < 1e-9
+        # the second axis is the first's turn of y by q0 (the cross's middle piece)
+        expected = np.array([0.0, np.cos(q0[k]), np.sin(q0[k])])
+        assert np.allclose(a1, expected, atol=1e-10)
+
+
+def test_redundant_spherical_joint_on_a_hinge():
+    """A hinge plus a ball joint at the same point: 3 redundant rows, 1 degree of freedom, the
+    motion of the hinge alone, the reactions' sum that of the hinge alone."""
+    hinge = (f"bodies:\n  rod: {ROD}position: [0, 0, -0.5]}}\n"
+             "joints:\n  - {name: h, type: revolute, bodies: [world, rod], point: [0, 0, 0], "
+             "axis: [0, 1, 0]}\n")
+    tail = ("initial: {positions: {h: 1.0}}\nforces: [{type: gravity, g: [0, 0, -9.81]}]\n"
+            "time: {duration: 1.0}\n")
+    alone = _system(hinge + tail, every=0.1)
+    both = _system(hinge + "  - {name: b, type: spherical, bodies: [world, rod], "
+                   "point: [0, 0, 0]}\n" + tail, every=0.1)
+    d = both.diagnostics
+    assert d["degrees_of_freedom"] == 1 and d["redundant_constraints"] == 3
+    assert np.max(np.abs(both.samples.position - alone.samples.position)) < 1e-10
+    total = both.samples.force[:, 0] + both.samples.force[:, 1]
+    assert np.max(np.abs(total - alone.samples.force[:, 0])) < 1e-8
+    assert d["constraint_residual"]["position"] < 1e-13
+
+
+def test_locked_mechanism_stays_put_and_says_so():
+    text = (f"bodies:\n  rod: {ROD}position: [0.5, 0, 0]}}\n"
+            "joints:\n  - {name: h, type: revolute, bodies: [world, rod], point: [0, 0, 0], "
+            "axis: [0, 1, 0]}\n"
+            "  - {name: tie, type: distance, bodies: [world, rod], points: [[1, 0, 1], "
+            "[1, 0, 0]]}\n"
+            "forces: [{type: gravity, g: [0, 0, -9.81]}]\ntime: {duration: 1.0}\n")
+    result = _system(text, every=0.25)
+    assert result.diagnostics["degrees_of_freedom"] == 0
+    assert any("locked" in note for note in result.notes)
+    s = result.samples
+    assert np.all(np.isfinite(s.force)) and np.max(np.abs(s.velocity)) < 1e-12
+    # statics: the tie carries the rod's weight about the hinge: m g (l/2) / l = m g / 2, up
+    assert np.allclose(s.force[:, 1], [0, 0, 9.81 / 2], atol=1e-9)
