@@ -179,3 +179,17 @@ def test_one_link_system_equals_one_body_joint():
                          - ref.trajectory.angular_velocity)) < 1e-7
     force = ref.trajectory.joints[0].force_world
     assert np.max(np.abs(sys_run.force[:, 0] - force)) < 1e-6 * np.max(np.abs(force))
+
+
+def test_precision_ladder_on_a_system():
+    from massprops.dynamics.systems.precision import precision_system
+
+    scene = with_time(load_system(SAMPLES / "double_pendulum.yaml"), duration=0.5)
+    report = precision_system(scene).as_dict()
+    assert report["reference"]["kind"] == "run" and report["reference"]["accuracy"] < 1e-11
+    runs = report["runs"]
+    assert len(runs) >= 4 and {"integrator", "setting", "wall_time_s", "error",
+                                "steps"} <= set(runs[0])
+    for run in runs:  # the estimate is honest on every rung: true error within 10x of it
+        assert run["error"] < 10 * run["error_estimate"] + 3 * report["reference"]["accuracy"]
+    assert runs[-1]["error"] < 1e-3 * runs[0]["error"]

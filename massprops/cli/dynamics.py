@@ -169,6 +169,14 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
             from massprops.dynamics.plots import require_matplotlib
 
             require_matplotlib()
+        if _is_system(scene_path):  # a `bodies:` scene: the systems package's own ladder
+            from massprops.dynamics.systems.precision import precision_system
+            from massprops.dynamics.systems.scene import load_system
+
+            scene = load_system(scene_path)
+            report = precision_system(scene)
+            _emit_precision(report, scene_path, plot_path, as_json, force, scene.input_files)
+            return
         scene = load_scene(scene_path)
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
         whole_process()
@@ -245,3 +253,19 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     for name, joint in data["final"]["joints"].items():
         click.echo(f"  {name} ({joint['type']}): q = {joint['coordinates']}, "
                    f"force {joint['force']} N, torque {joint['torque']} N·m")
+
+
+def _emit_precision(report: Any, scene_path: str, plot_path: str | None, as_json: bool,
+                    force: bool, inputs: Any) -> None:
+    """A system's precision report, as the one-body command shows it."""
+    if plot_path:
+        from massprops.dynamics.plots import plot_precision
+
+        plot_precision(report, plot_path, title=scene_path, force=force,
+                       protect=[scene_path, *inputs])
+    if as_json:
+        emit_json(report.as_dict())
+    else:
+        from massprops.report import print_precision
+
+        print_precision(scene_path, report)
