@@ -126,3 +126,25 @@ def test_locked_mechanism_stays_put_and_says_so():
     assert np.all(np.isfinite(s.force)) and np.max(np.abs(s.velocity)) < 1e-12
     # statics: the tie carries the rod's weight about the hinge: m g (l/2) / l = m g / 2, up
     assert np.allclose(s.force[:, 1], [0, 0, 9.81 / 2], atol=1e-9)
+
+
+def test_mesh_parts_in_one_assembly_equal_explicit_bodies():
+    from massprops.dynamics.systems.scene import load_system
+
+    meshes = load_system(SAMPLES / "mesh_pendulum.yaml")
+    m = 1000 * 0.04 * 0.04 * 1.0
+    across, along = m * (0.04**2 + 1.0) / 12, m * 2 * 0.04**2 / 12
+    body = f"{{mass: {m!r}, inertia: [[{across!r}, 0, 0], [0, {across!r}, 0], [0, 0, {along!r}]]"
+    text = (SAMPLES / "mesh_pendulum.yaml").read_text()
+    text = text.replace("{mesh: parts/upper_link.obj, density: 1000}",
+                        body + ", position: [0, 0, -0.5]}")
+    text = text.replace("{mesh: parts/lower_link.obj, density: 1000}",
+                        body + ", position: [0, 0, -1.5]}")
+    explicit = parse_system(text, source="t.yaml", base_dir=SAMPLES)
+    for b_mesh, b_explicit in zip(meshes.bodies, explicit.bodies):
+        assert np.allclose(b_mesh.com0, b_explicit.com0, atol=1e-15)
+        assert abs(b_mesh.mass - b_explicit.mass) < 1e-12 * m
+    a = simulate_system(meshes, rtol=1e-10, every=0.5, estimate=False).samples
+    b = simulate_system(explicit, rtol=1e-10, every=0.5, estimate=False).samples
+    assert np.max(np.abs(a.position - b.position)) < 1e-9
+    assert np.max(np.abs(a.force - b.force)) < 1e-8 * m * 9.81
