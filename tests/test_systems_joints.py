@@ -148,3 +148,21 @@ def test_mesh_parts_in_one_assembly_equal_explicit_bodies():
     b = simulate_system(explicit, rtol=1e-10, every=0.5, estimate=False).samples
     assert np.max(np.abs(a.position - b.position)) < 1e-9
     assert np.max(np.abs(a.force - b.force)) < 1e-8 * m * 9.81
+
+
+def test_plot_draws_planar_and_spatial_mechanisms(tmp_path):
+    import pytest
+
+    pytest.importorskip("matplotlib")
+    from massprops.dynamics.systems.plots import plot_system
+
+    planar = (f"bodies:\n  rod: {ROD}position: [0, 0, -0.5]}}\n"
+              "joints:\n  - {name: h, type: revolute, bodies: [world, rod], point: [0, 0, 0], "
+              "axis: [0, 1, 0]}\ninitial: {positions: {h: 1.0}}\n"
+              "forces: [{type: gravity, g: [0, 0, -9.81]}]\ntime: {duration: 0.5}\n")
+    spatial = planar.replace("type: revolute", "type: spherical").replace(
+        "positions: {h: 1.0}", "rates: {h: [0.0, 2.0, 1.0]}").replace(", axis: [0, 1, 0]", "")
+    for name, text in (("planar.png", planar), ("spatial.png", spatial)):
+        result = _system(text, every=0.05, rtol=1e-8)
+        plot_system(result, tmp_path / name)
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -102,7 +102,8 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
 
             require_matplotlib()
         if _is_system(scene_path):  # a `bodies:` scene: the systems package runs it
-            _simulate_system(scene_path, as_json, output_path, integrator, rtol, every, force)
+            _simulate_system(scene_path, as_json, output_path, integrator, rtol, every, force,
+                             plot_path)
             return
         scene = load_scene(scene_path)
         for w in scene.warnings:
@@ -224,7 +225,7 @@ def _is_system(scene_path: str) -> bool:
 
 def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
                      integrator: str | None, rtol: float | None, every: float | None,
-                     force: bool) -> None:
+                     force: bool, plot_path: str | None = None) -> None:
     """A system scene: run, write the trajectory, print JSON or a short summary."""
     from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
     from massprops.dynamics.systems.scene import load_system
@@ -234,7 +235,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
         say_warning(scene_path, w)
     out = output_path or scene.output.file
     sampling = every or scene.output.every
-    if sampling is None and out:
+    if sampling is None and (out or plot_path):
         sampling = scene.time.duration / 1000
     result = simulate_system(scene, integrator=integrator, rtol=rtol, every=sampling)
     for note in result.notes:
@@ -242,6 +243,10 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     if out:
         write_system_trajectory(result, out, force=force,
                                 protect=[scene_path, *scene.input_files])
+    if plot_path:
+        from massprops.dynamics.systems.plots import plot_system
+
+        plot_system(result, plot_path, force=force, protect=[scene_path, *scene.input_files])
     data = result.as_dict()
     if as_json:
         emit_json(data)

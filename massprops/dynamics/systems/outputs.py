@@ -23,7 +23,7 @@ class Samples:
     """t (n,); per body (name order of the scene) position, orientation [w,x,y,z] body -> world,
     velocity, angular_velocity (n, b, 3|4) world; per scene joint: coordinates and rates
     (lists of (n, k) arrays), force and torque (n, J, 3) on the second body at the joint's
-    point, world; energy (n,) J or None; lam_norm (n,) the multipliers' norm."""
+    point, world; energy (n,) J or None; joint_points (n, J, 3) world."""
 
     t: np.ndarray
     position: np.ndarray
@@ -35,6 +35,7 @@ class Samples:
     force: np.ndarray
     torque: np.ndarray
     energy: np.ndarray | None
+    joint_points: np.ndarray | None = None  # (n, J, 3) each joint's point on its second body
 
 
 def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples:
@@ -44,6 +45,7 @@ def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples
     pos, quat = np.empty((n, nb, 3)), np.empty((n, nb, 4))
     vel, omega = np.empty((n, nb, 3)), np.empty((n, nb, 3))
     force, torque = np.zeros((n, nj, 3)), np.zeros((n, nj, 3))
+    points = np.zeros((n, nj, 3))
     coords = [np.zeros((n, _ncoord(j.kind))) for j in scene.joints]
     rates = [np.zeros((n, _nrate(j.kind))) for j in scene.joints]
     for s in range(n):
@@ -56,13 +58,23 @@ def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples
         for k in range(nj):
             c, r = _joint_state(system, k, y[s], kin)
             coords[k][s], rates[k][s] = c, r
+            points[s, k] = _world_point(tree, kin, scene.joints[k].b, _joint_point(scene, k))
     for k, j in enumerate(scene.joints):  # angles of joints measured from poses: continuous
         if tree.of_scene[k][0] == "cut" and j.kind in ("revolute", "cylindrical", "universal"):
             turns = [0] if j.kind != "universal" else [0, 1]
             for col in turns:
                 coords[k][:, col] = np.unwrap(coords[k][:, col])
     energy = np.array([system.energy(row) for row in y]) if with_energy else None
-    return Samples(t, pos, quat, vel, omega, coords, rates, force, torque, energy)
+    return Samples(t, pos, quat, vel, omega, coords, rates, force, torque, energy, points)
+
+
+def _joint_point(scene, k: int) -> np.ndarray:
+    """A joint's point on its second body, world at t = 0 (a fixed joint without one: the
+    second body's centre of mass; a distance joint: its second point)."""
+    j = scene.joints[k]
+    if j.kind == "distance":
+        return j.points[1]
+    return j.point if j.point is not None else scene.bodies[j.b].com0
 
 
 def _ncoord(kind: str) -> int:
@@ -101,9 +113,7 @@ def _reactions(system, t: float, y: np.ndarray, sol, force: np.ndarray, torque: 
     for k, sj in enumerate(scene.joints):
         where, n = tree.of_scene[k]
         if where == "cut":
-            local = (sj.points[1] if sj.kind == "distance" else
-                     (sj.point if sj.point is not None else tree.bodies[sj.b].com0))
-            x = _world_point(tree, kin, sj.b, local)
+            x = _world_point(tree, kin, sj.b, _joint_point(scene, k))
             force[k], torque[k] = _at_point(cut_b[n], x)
             continue
         j = tree.joints[n]
