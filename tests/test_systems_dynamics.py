@@ -119,7 +119,7 @@ def test_four_bar_freudenstein_and_redundancy():
 
 
 def test_slider_crank_position():
-    scene = with_time(load_system(SAMPLES / "slider_crank.yaml"), duration=1.2)
+    scene = with_time(load_system(SAMPLES / "slider_crank.yaml"), duration=0.7)
     # the projection keeps the loop closed to round-off at any tolerance: a loose one will do
     result = simulate_system(scene, every=0.1, rtol=1e-7, estimate=False)
     s = result.samples
@@ -181,6 +181,7 @@ def test_one_link_system_equals_one_body_joint():
     assert np.max(np.abs(sys_run.force[:, 0] - force)) < 1e-6 * np.max(np.abs(force))
 
 
+@pytest.mark.slow  # eight rungs and a reference, ~5 s
 def test_precision_ladder_on_a_system():
     from massprops.dynamics.systems.precision import precision_system
 

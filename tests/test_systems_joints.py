@@ -166,3 +166,35 @@ def test_plot_draws_planar_and_spatial_mechanisms(tmp_path):
         result = _system(text, every=0.05, rtol=1e-8)
         plot_system(result, tmp_path / name)
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_singular_pose_is_reported_not_run_through():
+    """A parallelogram four-bar goes flat (all four joints on a line) after turning 120°: the
+    loop's constraints lose rank there, and the run stops saying so, naming the cut joint and
+    the time, instead of choosing a branch silently (or returning NaN)."""
+    import pytest
+
+    from massprops.errors import ComputationError
+
+    h = 0.8660254037844386
+    light = "[[0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.1]]"
+    heavy = "[[0.7, 0, 0], [0, 0.7, 0], [0, 0, 0.1]]"
+    text = f"""bodies:
+  crank: {{mass: 1.0, inertia: {light}, position: [0.25, 0, {h / 2!r}]}}
+  coupler: {{mass: 2.0, inertia: {heavy}, position: [1.5, 0, {h!r}]}}
+  rocker: {{mass: 1.0, inertia: {light}, position: [2.25, 0, {h / 2!r}]}}
+joints:
+  - {{name: A, type: revolute, bodies: [world, crank], point: [0, 0, 0], axis: [0, 1, 0]}}
+  - {{name: B, type: revolute, bodies: [crank, coupler], point: [0.5, 0, {h!r}], axis: [0, 1, 0]}}
+  - {{name: C, type: revolute, bodies: [coupler, rocker], point: [2.5, 0, {h!r}], axis: [0, 1, 0]}}
+  - {{name: D, type: revolute, bodies: [world, rocker], point: [2, 0, 0], axis: [0, 1, 0]}}
+initial: {{rates: {{A: 2.0}}, project_initial: true}}
+time: {{duration: 2.0}}
+"""
+    with pytest.raises(ComputationError) as info:
+        _system(text, every=0.1, rtol=1e-9)
+    message = str(info.value)
+    assert "singular pose" in message and "joint(s) C" in message and "\n" not in message
+    t_flat = (np.pi - np.pi / 3) / 2.0  # the crank turns at a constant 2 rad/s (no loads)
+    low, high = (float(x) for x in message.split("between t = ")[1].split(" s")[0].split(" and "))
+    assert low <= t_flat <= high

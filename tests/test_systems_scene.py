@@ -92,6 +92,7 @@ def test_cli_refusal_is_one_line_exit_1(tmp_path):
     assert "Traceback" not in done.stderr
 
 
+@pytest.mark.slow  # a fresh process: imports, the run and its error-estimate companion
 def test_cli_json_contract(tmp_path):
     path = tmp_path / "dp.yaml"
     path.write_text(GOOD.replace("duration: 1.0", "duration: 0.2"))

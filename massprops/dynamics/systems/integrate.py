@@ -65,6 +65,7 @@ def _segment(system, y, t0, t1, rtol, scales, floors, t_out, kout, run, max_step
     k = np.empty((16, n))
     k[0] = system.rhs(t0, y)
     run.nfev += 1
+    system.accept(t0, t0)
     h = _initial_step(system, y, k[0], t0, rtol, t1 - t0, scales)
     run.nfev += 1
     t, rejected = t0, False
@@ -95,6 +96,7 @@ def _segment(system, y, t0, t1, rtol, scales, floors, t_out, kout, run, max_step
             run.moved_q, run.moved_u = max(run.moved_q, dq), max(run.moved_u, du)
             k[12] = system.rhs(t_new, yproj)
             run.nfev += 1
+            system.accept(t, t_new)  # raises at a singular pose crossed inside the step
             if kout < len(t_out) and t_out[kout] <= t_new:
                 for s in range(13, 16):
                     k[s] = system.rhs(t + h * _C[s], y + h * (A[s, :s] @ k[:s]))
