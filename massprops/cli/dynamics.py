@@ -171,6 +171,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
 
             require_matplotlib()
         if _is_system(scene_path):  # a `bodies:` scene: the systems package's own ladder
+            # deferred: only a system scene needs them
             from massprops.dynamics.systems.precision import precision_system
             from massprops.dynamics.systems.scene import load_system
 
@@ -214,7 +215,7 @@ def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
 
 
 def _is_system(scene_path: str) -> bool:
-    from massprops.dynamics.systems.scene import is_system_text
+    from massprops.dynamics.systems.scene import is_system_text  # deferred: start-up cost
 
     try:
         with open(scene_path, encoding="utf-8-sig") as handle:
@@ -227,6 +228,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
                      integrator: str | None, rtol: float | None, every: float | None,
                      force: bool, plot_path: str | None = None) -> None:
     """A system scene: run, write the trajectory, print JSON or a short summary."""
+    # deferred, as the one-body path's imports: only a system scene needs them
     from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
     from massprops.dynamics.systems.scene import load_system
 

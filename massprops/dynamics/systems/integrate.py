@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, D
+from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, C, D
 from massprops.dynamics.systems import tree as tr
 
 E3 = B - BHH
@@ -152,10 +152,5 @@ def _dense_row(cont, s):
     return cont[0] + s * (cont[1] + s1 * (cont[2] + s * (cont[3] + s1 * par)))
 
 
-def _abscissae() -> np.ndarray:
-    from massprops.dynamics.integrators._dop853_tableau import C  # the stage times
-
-    return np.asarray(C, dtype=float)
-
-
-_C = _abscissae()
+_C = np.asarray(C, dtype=float)
+"""The stages' times as fractions of the step."""

@@ -130,7 +130,9 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
                     rtol: float | None = None, every: float | None = None,
                     estimate: bool = True) -> SystemResult:
     """Run ``scene``; ComputationError (exit 3) at a singular pose or a failed step."""
-    from massprops.dynamics.simulate import sample_times  # the one-body rule for output times
+    # deferred: dynamics.simulate brings the one-body run's modules (the output-time rule is
+    # shared, the rest is not needed here)
+    from massprops.dynamics.simulate import sample_times
 
     name = integrator or scene.time.integrator
     if name not in SYSTEM_INTEGRATORS:
@@ -232,7 +234,7 @@ def trajectory_table(result: SystemResult) -> tuple[list[str], np.ndarray]:
 def write_system_trajectory(result: SystemResult, path: str | Path, *, force: bool = False,
                             protect=()) -> None:
     """CSV (header, full precision) or NPZ (``columns`` and ``table``), atomically."""
-    from massprops.io.atomic import atomic_write_bytes  # the one atomic writer
+    from massprops.io.atomic import atomic_write_bytes  # deferred: only when a file is written
 
     path = Path(path)
     names, table = trajectory_table(result)

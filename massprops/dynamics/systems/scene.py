@@ -98,7 +98,8 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
     joints = _joints(fields.get("joints"), index, places)
     gravity, forces, springs = _forces(fields.get("forces"), index)
     initial = _initial(fields.get("initial"), index, {j.name for j in joints}, places)
-    from massprops.dynamics.integrators import integrator_names  # the registry's names
+    # deferred: the registry is read only once the scene's other keys are known to be good
+    from massprops.dynamics.integrators import integrator_names
 
     time = _time(fields["time"], integrator_names())
     output = _output(fields.get("output"), base_dir)
