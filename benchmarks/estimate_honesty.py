@@ -44,8 +44,15 @@ WORST = 12
 def ratios_of(path: Path) -> tuple[list[tuple[str, float, object]], dict]:
     """[(integrator, true / estimate, rung)] of the counted rungs of one scene, and tallies of
     the rungs left out (diverged, no estimate, at the reference's floor)."""
-    scene = load_scene(path)
-    report = precision(scene)
+    from massprops.dynamics.systems.scene import is_system_text  # systems: their own ladder
+
+    if is_system_text(path.read_text(encoding="utf-8")):
+        from massprops.dynamics.systems.precision import precision_system
+        from massprops.dynamics.systems.scene import load_system
+
+        report = precision_system(load_system(path))
+    else:
+        report = precision(load_scene(path))
     floor = FLOOR * report.reference["accuracy"]
     counted, left_out = [], defaultdict(int)
     for run in report.runs:

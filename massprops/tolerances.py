@@ -140,3 +140,17 @@ CAD_ROUNDING_ULPS = 64.0
 round-off per face on each quantity's natural scale about the local origin (Gauss sums of a few
 hundred terms per face, each exact to a few ulps); measured errors on analytic solids are
 1-4 ulps per solid, far inside."""
+
+CONSTRAINT_RANK_RTOL = 1e-8
+"""Singular values of a system's mass-weighted constraint Jacobian G M^(-1/2) below this
+fraction of the largest count as zero: the constraint they belong to repeats others (a planar
+four-bar of four revolutes in space has three such). Round-off leaves a repeated constraint's
+singular value at ~1e-16 of the largest; a true one of a non-degenerate pose stays above ~1e-3
+(unless the mechanism nears a singular pose, which is reported when its rank drops). 1e-8 sits
+in the middle of that gap on the log scale."""
+
+PROJECTION_ATOL_ULPS = 64
+"""A system's positions and velocities are projected onto Φ = 0 and Φ̇ = 0 until the residual
+is within this many ulps of the system size (positions, m) or of its speed scale (velocities):
+a few Newton iterations from an integrator step's O(rtol) drift reach it; the round-off of
+evaluating Φ itself (a sum of a few products of size-scale numbers) is ~10 ulps."""

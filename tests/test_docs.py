@@ -100,9 +100,14 @@ def test_module_map_is_not_empty():
     assert len(_module_map_paths()) > 50
 
 
-@pytest.mark.skipif(not (ROOT / "massprops" / "mesh").is_dir(),
-                    reason="the layered layout (massprops/mesh/ ...) is not merged in this tree")
 def test_module_map_names_files_that_exist():
     missing = [path for path in _module_map_paths()
                if not (ROOT / "massprops" / path).exists()]
     assert missing == []
+
+
+def test_every_module_is_in_the_module_map():
+    named = set(_module_map_paths())
+    modules = [p.relative_to(ROOT / "massprops").as_posix()
+               for p in (ROOT / "massprops").rglob("*.py") if p.name != "__init__.py"]
+    assert sorted(m for m in modules if m not in named) == []

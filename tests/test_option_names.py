@@ -15,7 +15,7 @@ import click
 import pytest
 
 from massprops.cli import cli
-from massprops.cli.common import SCENE_COMMANDS
+from massprops.cli.common import SCENE_COMMANDS, flag
 from massprops.cli.messages import fit_message
 
 PACKAGE = Path(__file__).resolve().parent.parent / "massprops"
@@ -30,13 +30,15 @@ UNREACHABLE = {
     ("massprops.cli.common", "mass"): "check_mass_options, called by inspect and align only",
     ("massprops.robot.elements", "principal"): "inspect --format mjcf --principal only",
     ("massprops.robot.elements", "format"): "inspect --format mjcf --principal only",
-    ("massprops.dynamics.compiled.prebuilt", "only"): "the build script's own usage line",
+    ("massprops.dynamics.compiled.build", "only"): "the build script's own usage line",
 }
 """Other commands' options that a shared module names in a branch this command never takes."""
 
 
 def _module_file(name: str) -> Path | None:
     rel = Path(*name.split(".")[1:])
+    if not rel.parts:
+        return PACKAGE / "__init__.py"
     for p in (PACKAGE / rel.with_suffix(".py"), PACKAGE / rel / "__init__.py"):
         if p.is_file():
             return p
@@ -68,9 +70,12 @@ def _strings(tree: ast.AST) -> list[str]:
             docs.add(id(node.value))
         if isinstance(node, ast.keyword) and node.arg == "help":
             docs.update(id(n) for n in ast.walk(node.value))
-    return [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)
-            and isinstance(n.value, str) and id(n) not in docs
-            and not re.fullmatch(r"--[a-z0-9-]+", n.value)]
+    refs = [flag(n.args[0].value) for n in ast.walk(tree)  # errors.setting_ref("name")
+            if isinstance(n, ast.Call) and getattr(n.func, "id", None) == "setting_ref"
+            and n.args and isinstance(n.args[0], ast.Constant)]
+    return refs + [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)
+                   and isinstance(n.value, str) and id(n) not in docs
+                   and not re.fullmatch(r"--[a-z0-9-]+", n.value)]
 
 
 def _reach(start: str) -> dict[str, ast.AST]:

@@ -104,6 +104,10 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             from massprops.dynamics.plots import require_matplotlib
 
             require_matplotlib()
+        if _is_system(scene_path):  # a `bodies:` scene: the systems package runs it
+            _simulate_system(scene_path, as_json, output_path, integrator, rtol, every, force,
+                             plot_path)
+            return
         scene = load_scene(scene_path)
         for w in scene.warnings:
             say_warning(scene.body_source, w)
@@ -172,6 +176,15 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
             from massprops.dynamics.plots import require_matplotlib
 
             require_matplotlib()
+        if _is_system(scene_path):  # a `bodies:` scene: the systems package's own ladder
+            # deferred: only a system scene needs them
+            from massprops.dynamics.systems.precision import precision_system
+            from massprops.dynamics.systems.scene import load_system
+
+            scene = load_system(scene_path)
+            report = precision_system(scene)
+            _emit_precision(report, scene_path, plot_path, as_json, force, scene.input_files)
+            return
         scene = load_scene(scene_path)
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
         whole_process()
@@ -209,3 +222,69 @@ def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
         from massprops.dynamics.plots import plot_simulation
 
         plot_simulation(result, plot_path, force=force, protect=protect)
+
+
+def _is_system(scene_path: str) -> bool:
+    from massprops.dynamics.systems.scene import is_system_text  # deferred: start-up cost
+
+    try:
+        with open(scene_path, encoding="utf-8-sig") as handle:
+            return is_system_text(handle.read())
+    except (OSError, UnicodeDecodeError):  # the one-body reader reports it
+        return False
+
+
+def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
+                     integrator: str | None, rtol: float | None, every: float | None,
+                     force: bool, plot_path: str | None = None) -> None:
+    """A system scene: run, write the trajectory, print JSON or a short summary."""
+    # deferred, as the one-body path's imports: only a system scene needs them
+    from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
+    from massprops.dynamics.systems.scene import load_system
+
+    scene = load_system(scene_path)
+    for w in scene.warnings:
+        say_warning(scene_path, w)
+    out = output_path or scene.output.file
+    sampling = every or scene.output.every
+    if sampling is None and (out or plot_path):
+        sampling = scene.time.duration / 1000
+    result = simulate_system(scene, integrator=integrator, rtol=rtol, every=sampling)
+    for note in result.notes:
+        click.echo(f"massprops: warning: {note}", err=True)
+    if out:
+        write_system_trajectory(result, out, force=force,
+                                protect=[scene_path, *scene.input_files])
+    if plot_path:
+        from massprops.dynamics.systems.plots import plot_system  # matplotlib: --plot only
+
+        plot_system(result, plot_path, force=force, protect=[scene_path, *scene.input_files])
+    data = result.as_dict()
+    if as_json:
+        emit_json(data)
+        return
+    diag = data["diagnostics"]
+    click.echo(f"{scene_path}: {len(scene.bodies)} bodies, {len(scene.joints)} joints, "
+               f"{diag['degrees_of_freedom']} degrees of freedom; t = {data['final']['t']:g} s "
+               f"in {data['steps']} steps; error estimate {diag['error_estimate']}")
+    for name, joint in data["final"]["joints"].items():
+        click.echo(f"  {name} ({joint['type']}): q = {joint['coordinates']}, "
+                   f"force {joint['force']} N, torque {joint['torque']} N·m")
+
+
+def _emit_precision(report: Any, scene_path: str, plot_path: str | None, as_json: bool,
+                    force: bool, inputs: Any) -> None:
+    """A system's precision report, as the one-body command shows it."""
+    if plot_path:
+        # deferred: matplotlib (the plot extra) loads only for --plot
+        from massprops.dynamics.plots import plot_precision
+
+        plot_precision(report, plot_path, title=scene_path, force=force,
+                       protect=[scene_path, *inputs])
+    if as_json:
+        emit_json(report.as_dict())
+    else:
+        # deferred: rich loads only for human-readable output
+        from massprops.cli.report import print_precision
+
+        print_precision(scene_path, report)

@@ -41,6 +41,9 @@ from massprops.dynamics.compiled.prebuilt import seed
 DYNAMICS = Path(__file__).resolve().parents[1]
 """The sources whose hash names the folder (every kernel and what it calls lives here)."""
 
+NOT_COMPILED = ("systems",)
+"""Sub-packages of dynamics that no kernel calls: an edit there keeps the kernels' folder."""
+
 UNUSED_CACHE_DAYS = 30
 """A cache folder of other sources (an older version, another checkout) not used for this many
 days is removed when a new one is made: each holds ~8 MB, and every upgrade makes one."""
@@ -50,6 +53,8 @@ days is removed when a new one is made: each holds ~8 MB, and every upgrade make
 def _digest() -> str:
     digest = hashlib.sha256(sys.version.encode())
     for path in sorted(DYNAMICS.rglob("*.py")):
+        if path.relative_to(DYNAMICS).parts[0] in NOT_COMPILED:
+            continue
         digest.update(path.relative_to(DYNAMICS).as_posix().encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:16]

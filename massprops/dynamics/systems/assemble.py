@@ -1,0 +1,176 @@
+"""From a SystemScene to a `Tree`: the spanning tree, cut joints, and the initial state.
+
+The tree is grown breadth-first from the world. Joints the scene names in ``initial`` or that
+carry loads (damping, a spring, a drive) are taken first, so they stay tree joints whose
+coordinates are integrated; a distance joint is always cut; a body that nothing joins to the
+world gets a free joint (a floating base). Every refusal names the scene's file, line and key.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from massprops.dynamics.systems.loops import Primitive, primitives
+from massprops.dynamics.systems.model import ONE_AXIS, WORLD, SystemScene
+from massprops.dynamics.systems.tree import NQ, NV, TreeJoint
+from massprops.errors import SceneError
+
+
+@dataclass(eq=False)
+class Tree:
+    """bodies (SystemBody); joints (TreeJoint, parents before children); parent_joint: body ->
+    index of the tree joint that carries it; cut: indices of the scene's cut joints; prims: their
+    primitives; of_scene: scene joint index -> ("tree", k) or ("cut", k); nq, nv."""
+
+    bodies: tuple
+    joints: list
+    parent_joint: dict
+    cut: list
+    prims: list[Primitive]
+    of_scene: dict
+    nq: int
+    nv: int
+    size: float
+    loaded: list = field(default_factory=list)  # tree joint indices with springs/drives
+
+
+def _priority(scene: SystemScene, k: int) -> int:
+    j = scene.joints[k]
+    named = j.name in scene.initial.positions or j.name in scene.initial.rates
+    loaded = j.damping or j.stiffness or j.drive
+    return 0 if named else (1 if loaded else 2)
+
+
+def build_tree(scene: SystemScene) -> Tree:
+    """The spanning tree of ``scene``'s joints (see the module doc)."""
+    bodies = scene.bodies
+    order = sorted(range(len(scene.joints)), key=lambda k: (_priority(scene, k), k))
+    placed, frontier = {WORLD}, [WORLD]
+    in_tree: list[tuple[int, int, int, bool]] = []  # (scene joint, parent, child, reversed)
+    used = set()
+    while frontier:
+        nxt = []
+        for node in frontier:
+            for k in order:
+                j = scene.joints[k]
+                if k in used or j.kind == "distance" or node not in (j.a, j.b):
+                    continue
+                other = j.b if j.a == node else j.a
+                if other in placed:
+                    continue
+                used.add(k)
+                placed.add(other)
+                in_tree.append((k, node, other, j.a != node))
+                nxt.append(other)
+        frontier = nxt
+    free = [i for i in range(len(bodies)) if i not in placed]
+    joints, iq, iu = [], 0, 0
+    for i in free:  # floating bases first: they are roots
+        joints.append(TreeJoint("free", WORLD, i, np.zeros((0, 3)), np.zeros(3), np.zeros(3),
+                                np.eye(3), iq, iu, None))
+        iq, iu = iq + NQ["free"], iu + NV["free"]
+    for k, parent, child, rev in in_tree:
+        j = scene.joints[k]
+        point = j.point if j.point is not None else bodies[j.b].com0
+        axes = np.asarray(j.axes, float)
+        if rev and j.kind == "universal":
+            axes = axes[::-1].copy()
+        rp0 = np.eye(3) if parent == WORLD else bodies[parent].rotation0
+        cp0 = np.zeros(3) if parent == WORLD else bodies[parent].com0
+        joints.append(TreeJoint(j.kind, parent, child, axes, rp0.T @ (point - cp0),
+                                bodies[child].rotation0.T @ (point - bodies[child].com0),
+                                rp0, iq, iu, k, rev))
+        iq, iu = iq + NQ[j.kind], iu + NV[j.kind]
+    joints = _parents_first(joints)
+    parent_joint = {j.child: n for n, j in enumerate(joints)}
+    of_scene = {j.source: ("tree", n) for n, j in enumerate(joints) if j.source is not None}
+    cut = [k for k in range(len(scene.joints)) if k not in used]
+    prims: list[Primitive] = []
+    for n, k in enumerate(cut):
+        j = scene.joints[k]
+        if j.kind in ONE_AXIS and (j.damping or j.stiffness or j.drive):
+            raise SceneError(f"{scene.where('joints.' + j.name)}joint {j.name!r} closes a loop "
+                             "and carries a spring, damper or drive, which only a tree joint "
+                             "may do yet; put the load on another joint of the loop")
+        for name, values in (("positions", scene.initial.positions),
+                             ("rates", scene.initial.rates)):
+            if j.name in values:
+                raise SceneError(f"{scene.where(f'initial.{name}.{j.name}')}joint {j.name!r} "
+                                 "closes a loop: its coordinates follow from the others; name "
+                                 "another joint of the loop")
+        of_scene[k] = ("cut", n)
+        prims += primitives(j, n, bodies)
+    loaded = [n for n, j in enumerate(joints) if j.source is not None
+              and j.kind in ONE_AXIS and (scene.joints[j.source].damping
+                                          or scene.joints[j.source].stiffness
+                                          or scene.joints[j.source].drive)]
+    return Tree(bodies, joints, parent_joint, cut, prims, of_scene, iq, iu, scene.size, loaded)
+
+
+def _parents_first(joints: list[TreeJoint]) -> list[TreeJoint]:
+    """The joints ordered so that a body's joint comes after its parent's (BFS already is)."""
+    done, out = {WORLD}, []
+    pending = list(joints)
+    while pending:
+        rest = []
+        for j in pending:
+            (out.append(j), done.add(j.child)) if j.parent in done else rest.append(j)
+        pending = rest
+    return out
+
+
+# --- the initial state --------------------------------------------------------------------------
+_CANNOT_MOVE = ("fixed", "distance")
+
+
+def initial_coordinates(scene: SystemScene, tree: Tree) -> tuple[np.ndarray, np.ndarray, set, set]:
+    """q0, u0 from ``initial`` (tree coordinates), and the sets of u indices the scene fixed
+    (named rates) and of q tangent indices it fixed (named positions)."""
+    q, u = np.zeros(tree.nq), np.zeros(tree.nv)
+    fixed_q, fixed_u = set(), set()
+    for j in tree.joints:
+        if j.kind in ("spherical", "free"):
+            q[j.iq + (3 if j.kind == "free" else 0)] = 1.0
+    for key, values in (("positions", scene.initial.positions), ("rates", scene.initial.rates)):
+        for name, value in values.items():
+            k = next(i for i, j in enumerate(scene.joints) if j.name == name)
+            sj = scene.joints[k]
+            where = scene.where(f"initial.{key}.{name}")
+            if sj.kind in _CANNOT_MOVE:
+                raise SceneError(f"{where}a {sj.kind} joint cannot move, so it takes no "
+                                 f"initial {key[:-1]}; remove it")
+            j = tree.joints[tree.of_scene[k][1]]
+            value = np.asarray(value, float)
+            sign = -1.0 if j.reversed else 1.0
+            if key == "rates":
+                if value.size != j.nv:
+                    raise SceneError(f"{where}expected {j.nv} rate(s) for a {j.kind} joint, "
+                                     f"got {value.size}")
+                u[j.iu:j.iu + j.nv] = sign * (value[::-1] if j.kind == "universal"
+                                              and j.reversed else value)
+                fixed_u.update(range(j.iu, j.iu + j.nv))
+                continue
+            if j.kind == "spherical":
+                if value.size != 4 or not np.linalg.norm(value) > 0:
+                    raise SceneError(f"{where}expected a quaternion [w, x, y, z] for a "
+                                     "spherical joint")
+                value = value / np.linalg.norm(value)
+                q[j.iq:j.iq + 4] = value * np.array([1, -1, -1, -1]) if j.reversed else value
+            else:
+                if value.size != j.nq:
+                    raise SceneError(f"{where}expected {j.nq} value(s) for a {j.kind} joint, "
+                                     f"got {value.size}")
+                q[j.iq:j.iq + j.nq] = sign * (value[::-1] if j.kind == "universal"
+                                              and j.reversed else value)
+            fixed_q.update(range(j.iu, j.iu + j.nv))
+    for name, (v, w) in scene.initial.velocities.items():
+        i = next(i for i, b in enumerate(tree.bodies) if b.name == name)
+        j = tree.joints[tree.parent_joint[i]]
+        if j.kind != "free":
+            raise SceneError(f"{scene.where('initial.bodies.' + name)}body {name!r} is held by "
+                             "a joint: give its joints' rates in initial.rates instead")
+        u[j.iu:j.iu + 3], u[j.iu + 3:j.iu + 6] = v, w
+        fixed_u.update(range(j.iu, j.iu + 6))
+    return q, u, fixed_q, fixed_u

@@ -1,0 +1,216 @@
+"""What a system run reports at each sample: body states, joint coordinates, rates, reactions.
+
+Reactions are the notes' g^(c) = M ḣ + b - g: each body's net spatial force with its computed
+acceleration minus the applied loads and the cut joints' forces on it (λ), summed over each
+subtree from the leaves in; a tree joint's reaction on its child is that sum less the joint's own
+applied load (spring, damper, drive along its axis). A cut joint's reaction on its second body is
+Σ λ ρ_b. All are reported on the scene joint's second body at the joint's point, world frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from massprops.dynamics.systems import tree as tr
+from massprops.dynamics.systems.model import WORLD
+from massprops.rotation import canonical, matrix_to_quat
+
+
+@dataclass(frozen=True, eq=False)
+class Samples:
+    """t (n,); per body (name order of the scene) position, orientation [w,x,y,z] body -> world,
+    velocity, angular_velocity (n, b, 3|4) world; per scene joint: coordinates and rates
+    (lists of (n, k) arrays), force and torque (n, J, 3) on the second body at the joint's
+    point, world; energy (n,) J or None; joint_points (n, J, 3) world."""
+
+    t: np.ndarray
+    position: np.ndarray
+    orientation: np.ndarray
+    velocity: np.ndarray
+    angular_velocity: np.ndarray
+    coordinates: list
+    rates: list
+    force: np.ndarray
+    torque: np.ndarray
+    energy: np.ndarray | None
+    joint_points: np.ndarray | None = None  # (n, J, 3) each joint's point on its second body
+
+
+def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples:
+    """Samples of the states ``y`` (n, nq + nv) at times ``t``."""
+    scene, tree = system.scene, system.tree
+    n, nb, nj = len(t), len(tree.bodies), len(scene.joints)
+    pos, quat = np.empty((n, nb, 3)), np.empty((n, nb, 4))
+    vel, omega = np.empty((n, nb, 3)), np.empty((n, nb, 3))
+    force, torque = np.zeros((n, nj, 3)), np.zeros((n, nj, 3))
+    points = np.zeros((n, nj, 3))
+    coords = [np.zeros((n, _ncoord(j.kind))) for j in scene.joints]
+    rates = [np.zeros((n, _nrate(j.kind))) for j in scene.joints]
+    for s in range(n):
+        sol = system.solve(float(t[s]), y[s], check=False)
+        kin = sol.kin
+        pos[s], vel[s] = kin.com, kin.V[:, 3:] + np.cross(kin.V[:, :3], kin.com)
+        omega[s] = kin.V[:, :3]
+        quat[s] = canonical(matrix_to_quat(kin.rotation))
+        _reactions(system, float(t[s]), y[s], sol, force[s], torque[s])
+        for k in range(nj):
+            c, r = _joint_state(system, k, y[s], kin)
+            coords[k][s], rates[k][s] = c, r
+            points[s, k] = _world_point(tree, kin, scene.joints[k].b, _joint_point(scene, k))
+    for k, j in enumerate(scene.joints):  # angles of joints measured from poses: continuous
+        if tree.of_scene[k][0] == "cut" and j.kind in ("revolute", "cylindrical", "universal"):
+            turns = [0] if j.kind != "universal" else [0, 1]
+            for col in turns:
+                coords[k][:, col] = np.unwrap(coords[k][:, col])
+    energy = np.array([system.energy(row) for row in y]) if with_energy else None
+    return Samples(t, pos, quat, vel, omega, coords, rates, force, torque, energy, points)
+
+
+def _joint_point(scene, k: int) -> np.ndarray:
+    """A joint's point on its second body, world at t = 0 (a fixed joint without one: the
+    second body's centre of mass; a distance joint: its second point)."""
+    j = scene.joints[k]
+    if j.kind == "distance":
+        return j.points[1]
+    return j.point if j.point is not None else scene.bodies[j.b].com0
+
+
+def _ncoord(kind: str) -> int:
+    return {"revolute": 1, "prismatic": 1, "cylindrical": 2, "universal": 2, "spherical": 4}.get(
+        kind, 0)
+
+
+def _nrate(kind: str) -> int:
+    return {"revolute": 1, "prismatic": 1, "cylindrical": 2, "universal": 2, "spherical": 3}.get(
+        kind, 0)
+
+
+def _at_point(f: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A spatial force (n_O, f) as (force, torque about p)."""
+    return f[3:], f[:3] - np.cross(p, f[3:])
+
+
+def _reactions(system, t: float, y: np.ndarray, sol, force: np.ndarray, torque: np.ndarray):
+    scene, tree = system.scene, system.tree
+    kin = sol.kin
+    q, u = y[:system.nq], y[system.nq:]
+    fext, tau = system.applied(t, kin, q, u)
+    net = tr.body_forces(tree, kin, fext)
+    cut_b = np.zeros((len(tree.cut), 6))
+    r = 0
+    for p in tree.prims:
+        for k in range(p.rows):
+            fb, fa = sol.lam[r + k] * sol.rho_b[r + k], sol.lam[r + k] * sol.rho_a[r + k]
+            cut_b[p.joint] += fb
+            if p.b != WORLD:
+                net[p.b] -= fb
+            if p.a != WORLD:
+                net[p.a] -= fa
+        r += p.rows
+    through = tr.transmitted(tree, net)
+    for k, sj in enumerate(scene.joints):
+        where, n = tree.of_scene[k]
+        if where == "cut":
+            x = _world_point(tree, kin, sj.b, _joint_point(scene, k))
+            force[k], torque[k] = _at_point(cut_b[n], x)
+            continue
+        j = tree.joints[n]
+        f = through[n].copy()
+        if j.nv and j.kind in ("revolute", "prismatic") and tau[j.iu] != 0.0:
+            w = kin.S[n][:3, 0] if j.kind == "revolute" else kin.S[n][3:, 0]
+            if j.kind == "revolute":
+                f[:3] -= tau[j.iu] * w
+            else:
+                p = kin.point[n]
+                f[:3] -= tau[j.iu] * np.cross(p, w)
+                f[3:] -= tau[j.iu] * w
+        if j.reversed:
+            f = -f
+        force[k], torque[k] = _at_point(f, kin.point[n])
+
+
+def _world_point(tree, kin, body: int, world0: np.ndarray) -> np.ndarray:
+    if body == WORLD:
+        return np.asarray(world0, float)
+    b = tree.bodies[body]
+    return kin.com[body] + kin.rotation[body] @ (b.rotation0.T @ (world0 - b.com0))
+
+
+def _carry(tree, kin, body: int) -> np.ndarray:
+    """E = R R0ᵀ: the world frame at t = 0 carried by ``body`` (identity for the world)."""
+    if body == WORLD:
+        return np.eye(3)
+    return kin.rotation[body] @ tree.bodies[body].rotation0.T
+
+
+def _omega(kin, body: int) -> np.ndarray:
+    return np.zeros(3) if body == WORLD else kin.V[body, :3]
+
+
+def _joint_state(system, k: int, y: np.ndarray, kin):
+    """(coordinates, rates) of scene joint k, in the contract's signs."""
+    scene, tree = system.scene, system.tree
+    sj = scene.joints[k]
+    where, n = tree.of_scene[k]
+    q, u = y[:system.nq], y[system.nq:]
+    if sj.kind in ("fixed", "distance"):
+        return np.zeros(0), np.zeros(0)
+    if where == "tree":
+        j = tree.joints[n]
+        qj, uj = q[j.iq:j.iq + j.nq], u[j.iu:j.iu + j.nv]
+        if not j.reversed:
+            return qj, uj
+        if j.kind == "spherical":
+            rel = tr.quat_matrix(qj)
+            return qj * np.array([1, -1, -1, -1]), -rel.T @ uj
+        if j.kind == "universal":
+            return -qj[::-1], -uj[::-1]
+        return -qj, -uj
+    return _from_poses(tree, kin, sj)
+
+
+def _from_poses(tree, kin, sj):
+    """A cut joint's coordinates and rates measured from its two bodies' poses."""
+    ea, eb = _carry(tree, kin, sj.a), _carry(tree, kin, sj.b)
+    rel = ea.T @ eb
+    w_rel = ea.T @ (_omega(kin, sj.b) - _omega(kin, sj.a))
+    if sj.kind == "spherical":
+        return matrix_to_quat(rel), w_rel
+    if sj.kind == "universal":
+        a0, a1 = sj.axes
+        target = rel @ a1
+        q0 = _angle_about(a0, a1, target)
+        rest = tr.rot(a0, q0).T @ rel
+        q1 = _angle_about(a1, _perp(a1), rest @ _perp(a1))
+        basis = np.stack([a0, tr.rot(a0, q0) @ a1], axis=1)
+        return np.array([q0, q1]), np.linalg.lstsq(basis, w_rel, rcond=None)[0]
+    axis = sj.axes[0]
+    turn = _angle_about(axis, _perp(axis), rel @ _perp(axis))
+    xa = _world_point(tree, kin, sj.a, sj.point)
+    xb = _world_point(tree, kin, sj.b, sj.point)
+    e = ea @ axis
+    shift = (xb - xa) @ e
+    va = np.zeros(3) if sj.a == WORLD else kin.V[sj.a, 3:] + np.cross(kin.V[sj.a, :3], xa)
+    vb = kin.V[sj.b, 3:] + np.cross(kin.V[sj.b, :3], xb)
+    shift_rate = (vb - va) @ e + (xb - xa) @ np.cross(_omega(kin, sj.a), e)
+    if sj.kind == "revolute":
+        return np.array([turn]), np.array([w_rel @ axis])
+    if sj.kind == "prismatic":
+        return np.array([shift]), np.array([shift_rate])
+    return np.array([turn, shift]), np.array([w_rel @ axis, shift_rate])
+
+
+def _perp(axis: np.ndarray) -> np.ndarray:
+    helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
+    v = np.cross(axis, helper)
+    return v / np.linalg.norm(v)
+
+
+def _angle_about(axis: np.ndarray, start: np.ndarray, end: np.ndarray) -> float:
+    """Signed angle (right hand about ``axis``) from ``start`` to ``end`` projected on the plane
+    normal to the axis."""
+    s = start - (start @ axis) * axis
+    e = end - (end @ axis) * axis
+    return float(np.arctan2(axis @ np.cross(s, e), s @ e))

@@ -1,0 +1,248 @@
+"""Simulate a system scene: the start on the joints, the run, its error estimate, diagnostics.
+
+The error estimate is global, as for one body (dynamics.accuracy): a companion run at
+rtol / ADAPTIVE_TIGHTENING, compared in the contract's metric over all bodies (position error /
+system size, orientation angle, velocity errors relative to the run's largest speeds).
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from massprops import tolerances
+from massprops.dynamics.accuracy import ADAPTIVE_TIGHTENING
+from massprops.dynamics.systems.assemble import build_tree, initial_coordinates
+from massprops.dynamics.systems.integrate import integrate
+from massprops.dynamics.systems.model import SystemScene
+from massprops.dynamics.systems.outputs import Samples, evaluate
+from massprops.dynamics.systems.system import System
+from massprops.errors import ComputationError, SceneError, UsageError
+from massprops.rotation import quat_to_matrix, rotation_angle_between
+
+SYSTEM_INTEGRATORS = ("auto", "dop853")
+"""What a system scene may name: the registry's kernels take one body's state only (DESIGN.md,
+"Systems of bodies"); its dop853 is here the systems package's own, over [q, u]."""
+
+
+@dataclass(frozen=True, eq=False)
+class SystemResult:
+    """What `massprops simulate` reports for a system (see ``as_dict``)."""
+
+    samples: Samples
+    steps: int
+    evaluations: int
+    rejected: int
+    wall_time_s: float
+    diagnostics: dict
+    scene: SystemScene
+    notes: tuple[str, ...] = field(default=())
+
+    def as_dict(self) -> dict:
+        s, sc = self.samples, self.scene
+        bodies = {b.name: {"position": s.position[-1, i].tolist(),
+                           "orientation": s.orientation[-1, i].tolist(),
+                           "velocity": s.velocity[-1, i].tolist(),
+                           "angular_velocity": s.angular_velocity[-1, i].tolist(),
+                           "angular_velocity_body": (quat_to_matrix(s.orientation[-1, i]).T
+                                                     @ s.angular_velocity[-1, i]).tolist()}
+                  for i, b in enumerate(sc.bodies)}
+        joints = {j.name: {"type": j.kind, "bodies": [_name(sc, j.a), _name(sc, j.b)],
+                           "coordinates": s.coordinates[k][-1].tolist(),
+                           "rates": s.rates[k][-1].tolist(),
+                           "force": s.force[-1, k].tolist(), "torque": s.torque[-1, k].tolist()}
+                  for k, j in enumerate(sc.joints)}
+        return {"integrator": "dop853", "reason": "systems: adaptive 8th order with projection",
+                "steps": self.steps, "evaluations": self.evaluations,
+                "rejected_steps": self.rejected, "wall_time_s": self.wall_time_s,
+                "final": {"t": float(s.t[-1]), "bodies": bodies, "joints": joints},
+                "diagnostics": self.diagnostics}
+
+
+def _name(scene: SystemScene, i: int) -> str:
+    return "world" if i < 0 else scene.bodies[i].name
+
+
+def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
+    """The System and its start y0 on the joints (refusals at the scene's lines), notes."""
+    tree = build_tree(scene)
+    system = System(scene, tree)
+    q, u, fixed_q, fixed_u = initial_coordinates(scene, tree)
+    y0 = np.concatenate([q, u])
+    notes: list[str] = []
+    if system.m:
+        pos, vel = system.residual(y0)
+        speed = max(float(np.abs(u).max(initial=0.0)) * tree.size, tree.size
+                    / scene.time.duration)
+        bad_pos = pos > tolerances.JOINT_RTOL * tree.size
+        bad_vel = vel > tolerances.JOINT_RTOL * speed
+        if (bad_pos or bad_vel) and not scene.initial.project:
+            what, key = (("positions", "initial.positions") if bad_pos
+                         else ("rates", "initial.rates"))
+            amount = f"{pos:.3g} m" if bad_pos else f"{vel:.3g} m/s"
+            named = [k for k in scene.places if k.startswith(key + ".")]
+            place = scene.where(named[0]) if named else scene.where("initial")
+            raise SceneError(f"{place}the initial {what} open a closed loop (the joints miss "
+                             f"by {amount}); set initial.project_initial: true to keep the named "
+                             "coordinates and rates and solve the others")
+        before = y0
+        y0, _, _ = system.project(y0, (fixed_q, fixed_u), iterations=50)
+        if system.residual(y0)[0] > 1e3 * tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS \
+                * tree.size:
+            raise SceneError(f"{scene.where('initial')}the named initial coordinates cannot "
+                             "be met by the loop's other joints; change them")
+        moved = float(np.abs(y0 - before).max())
+        if scene.initial.project and moved > 0:
+            notes.append(f"{scene.where('initial')}projected onto the joints: coordinates and "
+                         f"rates moved by up to {moved:.3g}")
+    sol = system.solve(0.0, y0, check=False)
+    system.rank = sol.rank
+    return system, y0, notes
+
+
+def _floors(system: System, duration: float) -> np.ndarray:
+    """Smallest error scale per component: 1 rad (or the size for a length) for coordinates,
+    those per duration for rates."""
+    tree = system.tree
+    fq, fu = np.ones(tree.nq), np.full(tree.nv, 1.0 / duration)
+    for j in tree.joints:
+        if j.kind == "prismatic":
+            fq[j.iq], fu[j.iu] = tree.size, tree.size / duration
+        elif j.kind == "cylindrical":
+            fq[j.iq + 1], fu[j.iu + 1] = tree.size, tree.size / duration
+        elif j.kind == "free":
+            fq[j.iq:j.iq + 3], fu[j.iu:j.iu + 3] = tree.size, tree.size / duration
+    return np.concatenate([fq, fu])
+
+
+def _windows(scene: SystemScene) -> np.ndarray:
+    edges = [f.start for f in scene.forces] + [f.end for f in scene.forces]
+    edges += [j.start for j in scene.joints if j.drive] + [j.end for j in scene.joints if j.drive]
+    return np.unique([e for e in edges if math.isfinite(e)])
+
+
+def simulate_system(scene: SystemScene, *, integrator: str | None = None,
+                    rtol: float | None = None, every: float | None = None,
+                    estimate: bool = True) -> SystemResult:
+    """Run ``scene``; ComputationError (exit 3) at a singular pose or a failed step."""
+    # deferred: dynamics.simulate brings the one-body run's modules (the output-time rule is
+    # shared, the rest is not needed here)
+    from massprops.dynamics.simulate import sample_times
+
+    name = integrator or scene.time.integrator
+    if name not in SYSTEM_INTEGRATORS:
+        raise UsageError(f"{scene.source}: integrator {name} steps one body's state only; a "
+                         "system runs with auto or dop853 (its own DOP853 with projection)")
+    rtol = float(rtol if rtol is not None else scene.time.rtol)
+    system, y0, notes = prepare(scene)
+    duration = scene.time.duration
+    t_out = sample_times(duration, every if every is not None else scene.output.every,
+                         scene.source)
+    floors = _floors(system, duration)
+    start = time.perf_counter()
+    run = integrate(system, y0, t_out, rtol, floors, _windows(scene))
+    wall = time.perf_counter() - start
+    if run.failure is not None:
+        raise ComputationError(str(run.failure).splitlines()[0]) from run.failure
+    conservative = system.conservative()
+    samples = evaluate(system, t_out, run.y_out, with_energy=conservative)
+    residual = np.array([system.residual(row) for row in run.y_out])
+    diagnostics = {
+        "energy_rel_drift": None, "error_estimate": None,
+        "constraint_residual": {"position": float(residual[:, 0].max()),
+                                "velocity": float(residual[:, 1].max())},
+        "degrees_of_freedom": system.nv - system.rank,
+        "redundant_constraints": system.m - system.rank,
+        "projection": {"position": run.moved_q, "velocity": run.moved_u},
+        "singularity_margin": system.margin if system.m else None,
+        "reactions": ("unique" if system.m == system.rank else
+                      "minimum-norm multipliers: the redundant constraints' reactions are not "
+                      "unique; the smallest set of loop forces is reported"),
+    }
+    if conservative:
+        e = samples.energy
+        scale = max(abs(e[0]), _energy_scale(system), 1e-300)
+        diagnostics["energy_rel_drift"] = float(np.max(np.abs(e - e[0])) / scale)
+    if system.nv == system.rank and system.m:
+        notes.append(f"{scene.source}: the mechanism is locked: 0 degrees of freedom (joints "
+                     f"{', '.join(scene.joints[k].name for k in system.tree.cut)} close it)")
+    if system.m > system.rank:
+        notes.append(f"{scene.source}: {system.m - system.rank} redundant constraint(s): the "
+                     "reactions reported are the minimum-norm choice, not unique")
+    if estimate:
+        other = integrate(system, y0, t_out, rtol / ADAPTIVE_TIGHTENING, floors,
+                          _windows(scene))
+        if other.failure is None:
+            companion = evaluate_states(system, t_out, other.y_out)
+            diagnostics["error_estimate"] = distance(samples, companion, scene.size)
+    return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics, scene,
+                        tuple(notes))
+
+
+def _energy_scale(system: System) -> float:
+    """J: Σ m |g| × size and the springs' k × size², a floor for the relative energy drift."""
+    size = system.tree.size
+    weight = float(np.sum(np.linalg.norm(system.weights, axis=1))) * size
+    springs = sum(s.stiffness for s in system.scene.springs) * size * size
+    return weight + springs + sum(j.stiffness for j in system.scene.joints)
+
+
+def evaluate_states(system: System, t: np.ndarray, y: np.ndarray) -> Samples:
+    """Body states only (no reactions): for comparing runs."""
+    return evaluate(system, t, y, with_energy=False)
+
+
+def distance(a: Samples, b: Samples, size: float) -> float:
+    """The contract's error between two system runs: the largest over the bodies of position
+    error / system size, orientation angle, velocity errors relative to the largest speeds."""
+    duration = float(a.t[-1]) or 1.0
+    v_scale = max(float(np.abs(a.velocity).max()), size / duration)
+    w_scale = max(float(np.abs(a.angular_velocity).max()), 1.0 / duration)
+    parts = [np.linalg.norm(a.position - b.position, axis=-1).max() / size,
+             rotation_angle_between(a.orientation.reshape(-1, 4),
+                                    b.orientation.reshape(-1, 4)).max(),
+             np.linalg.norm(a.velocity - b.velocity, axis=-1).max() / v_scale,
+             np.linalg.norm(a.angular_velocity - b.angular_velocity, axis=-1).max() / w_scale]
+    return float(max(parts))
+
+
+# --- the trajectory file ------------------------------------------------------------------------
+def trajectory_table(result: SystemResult) -> tuple[list[str], np.ndarray]:
+    """The contract's columns: t, per body x y z qw qx qy qz vx vy vz wx wy wz, per joint q/u
+    (q0.. u0.. for several) and fx fy fz tx ty tz."""
+    s, sc = result.samples, result.scene
+    names, cols = ["t"], [s.t[:, None]]
+    for i, b in enumerate(sc.bodies):
+        names += [f"{b.name}.{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz", "vx", "vy",
+                                            "vz", "wx", "wy", "wz")]
+        cols += [s.position[:, i], s.orientation[:, i], s.velocity[:, i],
+                 s.angular_velocity[:, i]]
+    for k, j in enumerate(sc.joints):
+        nq, nu = s.coordinates[k].shape[1], s.rates[k].shape[1]
+        names += [f"{j.name}.q"] if nq == 1 else [f"{j.name}.q{c}" for c in range(nq)]
+        names += [f"{j.name}.u"] if nu == 1 else [f"{j.name}.u{c}" for c in range(nu)]
+        names += [f"{j.name}.{c}" for c in ("fx", "fy", "fz", "tx", "ty", "tz")]
+        cols += [s.coordinates[k], s.rates[k], s.force[:, k], s.torque[:, k]]
+    return names, np.hstack(cols)
+
+
+def write_system_trajectory(result: SystemResult, path: str | Path, *, force: bool = False,
+                            protect=()) -> None:
+    """CSV (header, full precision) or NPZ (``columns`` and ``table``), atomically."""
+    from massprops.io.atomic import atomic_write_bytes  # deferred: only when a file is written
+
+    path = Path(path)
+    names, table = trajectory_table(result)
+    buf = io.BytesIO()
+    if path.suffix.lower() == ".csv":
+        np.savetxt(buf, table, delimiter=",", fmt="%.17g", header=",".join(names), comments="")
+    elif path.suffix.lower() == ".npz":
+        np.savez(buf, columns=np.array(names), table=table)
+    else:
+        raise UsageError(f"trajectory file must end in .csv or .npz, got {path.suffix!r}")
+    atomic_write_bytes(path, buf.getvalue(), force=force, protect=protect)

@@ -1,0 +1,298 @@
+"""The equations of a system: applied loads, accelerations and multipliers, projection, reactions.
+
+M u̇ + h(q, u) = τ + Gᵀλ (h from RNEA with u̇ = 0 and the applied body loads, τ the joints' own
+springs, dampers and drives), G u̇ = -Φ̈(u̇ = 0). With M = L Lᵀ and B = G L⁻ᵀ = U Σ Vᵀ:
+λ = U Σ⁺² Uᵀ r (minimum norm where rows repeat), r = -Φ̈₀ - G M⁻¹(τ - h); u̇ = M⁻¹(τ - h + Gᵀλ).
+Singular values below CONSTRAINT_RANK_RTOL of the largest are zero; the rank fixes the degrees
+of freedom (nv - rank) and redundant rows (m - rank). Projection: δ = -L⁻ᵀ B⁺ Φ (the smallest
+correction in the kinetic-energy metric), Newton until Φ is at round-off; the same for Φ̇.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from massprops import tolerances
+from massprops.dynamics.systems import tree as tr
+from massprops.dynamics.systems.assemble import Tree
+from massprops.dynamics.systems.loops import terms
+from massprops.dynamics.systems.model import WORLD, SystemScene
+from massprops.dynamics.systems.tree import cross
+from massprops.errors import ComputationError
+
+EPS = tolerances.EPS
+
+
+class SingularPose(ComputationError):
+    """The constraint Jacobian lost rank during the run (a dead point) or the projection failed."""
+
+
+@dataclass(frozen=True, eq=False)
+class Solution:
+    """udot (nv,), lam (m,), rank of G, kinematics with the true accelerations, the cut
+    joints' spatial-force rows on their second and first bodies (loops.terms)."""
+
+    udot: np.ndarray
+    lam: np.ndarray
+    rank: int
+    kin: tr.Kinematics
+    rho_b: np.ndarray
+    rho_a: np.ndarray
+
+
+class System:
+    """A scene's tree, loops and loads; ``rhs`` is the ODE ẏ = f(t, y), y = [q (nq), u (nv)]."""
+
+    def __init__(self, scene: SystemScene, tree: Tree) -> None:
+        self.scene, self.tree = scene, tree
+        self.nq, self.nv, self.m = tree.nq, tree.nv, sum(p.rows for p in tree.prims)
+        bodies = tree.bodies
+        self.weights = np.array([b.mass * np.asarray(scene.gravity) for b in bodies])
+        self.force_local = [None if f.point is None else
+                            bodies[f.body].rotation0.T @ (f.point - bodies[f.body].com0)
+                            for f in scene.forces]
+        self.spring_local = [[_local(bodies, s.a, s.points[0]), _local(bodies, s.b, s.points[1])]
+                             for s in scene.springs]
+        self.rank: int | None = None  # of G at the start; a drop later is a singular pose
+        self.margin = 1.0  # smallest σ_min / σ_max of G M^(-1/2) kept over the run so far
+        self._last: tuple | None = None  # (B, kept left singular vectors) of the last solve
+        self._accepted: tuple | None = None  # the same at the last accepted step
+        self.time = 0.0
+
+    # --- loads ----------------------------------------------------------------------------------
+    def applied(self, t: float, kin: tr.Kinematics, q: np.ndarray, u: np.ndarray):
+        """(fext (n, 6) spatial forces about O on each body, τ (nv,) joint loads)."""
+        n = len(self.tree.bodies)
+        fext = np.zeros((n, 6))
+        for i in range(n):
+            fext[i, :3] = cross(kin.com[i], self.weights[i])
+            fext[i, 3:] = self.weights[i]
+        for f, local in zip(self.scene.forces, self.force_local):
+            if not f.start <= t < f.end:
+                continue
+            r = kin.rotation[f.body]
+            vec = r @ f.vector if f.frame == "body" else np.asarray(f.vector)
+            if f.kind == "torque":
+                fext[f.body, :3] += vec
+            else:
+                x = kin.com[f.body] + (r @ local if local is not None else 0.0)
+                fext[f.body, :3] += cross(x, vec)
+                fext[f.body, 3:] += vec
+        for s, (la, lb) in zip(self.scene.springs, self.spring_local):
+            xa, va = _point_state(kin, s.a, la)
+            xb, vb = _point_state(kin, s.b, lb)
+            d, dd = xb - xa, vb - va
+            if s.rest_length == 0.0:
+                force = -s.stiffness * d - s.damping * dd
+            else:
+                length = float(np.sqrt(d @ d))
+                e = d / length if length > 0 else np.zeros(3)
+                force = (-s.stiffness * (length - s.rest_length) - s.damping * (e @ dd)) * e
+            for body, x, sign in ((s.b, xb, 1.0), (s.a, xa, -1.0)):
+                if body != WORLD:
+                    fext[body, :3] += sign * cross(x, force)
+                    fext[body, 3:] += sign * force
+        tau = np.zeros(self.nv)
+        for k in self.tree.loaded:
+            j = self.tree.joints[k]
+            sj = self.scene.joints[j.source]
+            sign = -1.0 if j.reversed else 1.0
+            coord, rate = sign * q[j.iq], sign * u[j.iu]
+            load = -sj.stiffness * (coord - sj.rest) - sj.damping * rate
+            if sj.start <= t < sj.end:
+                load += sj.drive
+            tau[j.iu] += sign * load
+        return fext, tau
+
+    # --- accelerations --------------------------------------------------------------------------
+    def solve(self, t: float, y: np.ndarray, check: bool = True, full: bool = True) -> Solution:
+        """Accelerations and multipliers at (t, y); raises SingularPose when G's rank fell.
+        ``full``: also the kinematics at the true accelerations (for reactions)."""
+        q, u = y[:self.nq], y[self.nq:]
+        kin0 = tr.kinematics(self.tree, q, u)
+        fext, tau = self.applied(t, kin0, q, u)
+        h = tr.generalized(self.tree, kin0,
+                           tr.transmitted(self.tree, tr.body_forces(self.tree, kin0, fext)))
+        mass = tr.mass_matrix(self.tree, kin0)
+        chol = np.linalg.cholesky(mass)
+        rhs = tau - h
+        lam, rank = np.zeros(self.m), 0
+        rho_b = rho_a = np.zeros((0, 6))
+        if self.m:
+            phi, g, gdot, rho_b, rho_a = terms(self.tree.prims, kin0, tr.jacobians(self.tree, kin0),
+                                        self.nv, self.tree.size)
+            b = _lower_solve(chol, g.T).T  # G L⁻ᵀ
+            uu, sv, _ = np.linalg.svd(b, full_matrices=False)
+            keep = sv > tolerances.CONSTRAINT_RANK_RTOL * (sv[0] if sv.size else 0.0)
+            rank = int(keep.sum())
+            if check and rank:
+                self.margin = min(self.margin, float(sv[rank - 1] / sv[0]))
+                self._last = (b, uu[:, keep])
+            free = np.linalg.solve(chol.T, np.linalg.solve(chol, rhs))
+            r = -gdot - g @ free
+            coef = uu[:, keep].T @ r / sv[keep] ** 2
+            lam = uu[:, keep] @ coef
+            rhs = rhs + g.T @ lam
+            if check and self.rank is not None and rank < self.rank:
+                raise SingularPose(self._singular_message(t, uu[:, ~keep[:uu.shape[1]]]
+                                                          if uu.shape[1] else uu))
+        udot = np.linalg.solve(chol.T, np.linalg.solve(chol, rhs))
+        kin = tr.kinematics(self.tree, q, u, udot) if full else kin0
+        return Solution(udot, lam, rank, kin, rho_b, rho_a)
+
+    def _singular_message(self, t: float, directions: np.ndarray,
+                          since: float | None = None) -> str:
+        rows = np.abs(directions).max(axis=1) if directions.size else np.zeros(self.m)
+        names, r = [], 0
+        for p in self.tree.prims:
+            if rows[r:r + p.rows].max(initial=0.0) > 0.1:
+                name = self.scene.joints[self.tree.cut[p.joint]].name
+                names.append(name) if name not in names else None
+            r += p.rows
+        named = ", ".join(names) or ", ".join(self.scene.joints[k].name for k in self.tree.cut)
+        when = f"t = {t:.6g} s" if since is None else f"between t = {since:.6g} and {t:.6g} s"
+        return (f"{self.scene.source}: singular pose {when}: the loop closed by "
+                f"joint(s) {named} lost a constraint direction there (the constraints no "
+                "longer determine the motion beyond it: a change point, a dead point); stop "
+                "before it or change the geometry")
+
+    def accept(self, t_prev: float, t_new: float) -> None:
+        """Called by the integrator once per accepted step, right after the right-hand side at
+        the step's (projected) end: raises SingularPose when a singular pose was crossed inside
+        the step. Across such a pose one of the kept singular values of B = G M^(-1/2) passes
+        through zero and changes sign in the smooth decomposition, so the r×r matrix
+        U_prevᵀ B_new B_prevᵀ U_prev (≈ diag of σ_prev·σ_new) has a determinant of the other
+        sign; a step that only turns the mechanism keeps it positive. Rank checks at the
+        evaluated states alone would miss a crossing between them."""
+        if self._last is None:
+            return
+        if self._accepted is not None:
+            b_prev, u_prev = self._accepted
+            b_new = self._last[0]
+            if b_new.shape == b_prev.shape and np.linalg.det(
+                    u_prev.T @ b_new @ b_prev.T @ u_prev) <= 0.0:
+                raise SingularPose(self._singular_message(
+                    t_new, np.zeros((self.m, 0)), since=t_prev))
+        self._accepted = self._last
+
+    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        """ẏ = [q̇, u̇]."""
+        self.time = t
+        sol = self.solve(t, y, full=False)
+        return np.concatenate([tr.qdot(self.tree, y[:self.nq], y[self.nq:]), sol.udot])
+
+    # --- projection -----------------------------------------------------------------------------
+    def constraint(self, y: np.ndarray):
+        """(Φ (m,), G (m, nv), Cholesky factor of M) at y."""
+        q, u = y[:self.nq], y[self.nq:]
+        kin = tr.kinematics(self.tree, q, u)
+        phi, g, _, _, _ = terms(self.tree.prims, kin, tr.jacobians(self.tree, kin), self.nv,
+                             self.tree.size)
+        return phi, g, np.linalg.cholesky(tr.mass_matrix(self.tree, kin))
+
+    def project(self, y: np.ndarray, fixed: tuple[set, set] = (set(), set()),
+                iterations: int = 12) -> tuple[np.ndarray, float, float]:
+        """y moved onto Φ = 0, Φ̇ = 0 (coordinates in ``fixed`` (q tangents, u) kept): the
+        projected y and the sizes of the position and velocity corrections (max-norm)."""
+        if not self.m:
+            return y, 0.0, 0.0
+        y = y.copy()
+        tr.normalize(self.tree, y[:self.nq])
+        size = self.tree.size
+        atol = tolerances.PROJECTION_ATOL_ULPS * EPS * size
+        moved_q = 0.0
+        for _ in range(iterations):
+            phi, g, chol = self.constraint(y)
+            if np.abs(phi).max() <= atol:
+                break
+            delta = -_min_norm(g, chol, phi, fixed[0])
+            moved_q += float(np.abs(delta).max())
+            y[:self.nq] = tr.advance(self.tree, y[:self.nq], delta)
+        else:
+            phi, g, chol = self.constraint(y)
+            if np.abs(phi).max() > 1e3 * atol:
+                raise SingularPose(f"{self.scene.source}: the joints cannot be closed at "
+                                   f"t = {self.time:.6g} s (position residual "
+                                   f"{np.abs(phi).max():.3g} m after {iterations} Newton "
+                                   "steps): the loop cannot be assembled there")
+        phi, g, chol = self.constraint(y)
+        u = y[self.nq:]
+        du = -_min_norm(g, chol, g @ u, fixed[1])
+        y[self.nq:] = u + du
+        return y, moved_q, float(np.abs(du).max()) if du.size else 0.0
+
+    def residual(self, y: np.ndarray) -> tuple[float, float]:
+        """Largest |Φ| (m) and |Φ̇| (m/s) at y."""
+        if not self.m:
+            return 0.0, 0.0
+        phi, g, _ = self.constraint(y)
+        return float(np.abs(phi).max()), float(np.abs(g @ y[self.nq:]).max())
+
+    # --- energy -----------------------------------------------------------------------------------
+    def energy(self, y: np.ndarray) -> float:
+        """Kinetic + gravity + springs (bodies' and joints'), J."""
+        q, u = y[:self.nq], y[self.nq:]
+        kin = tr.kinematics(self.tree, q, u)
+        e = sum(0.5 * kin.V[i] @ kin.inertia[i] @ kin.V[i] for i in range(len(kin.com)))
+        e -= float(np.sum(self.weights * kin.com))
+        for s, (la, lb) in zip(self.scene.springs, self.spring_local):
+            xa, _ = _point_state(kin, s.a, la)
+            xb, _ = _point_state(kin, s.b, lb)
+            d = xb - xa
+            e += 0.5 * s.stiffness * (np.sqrt(d @ d) - s.rest_length) ** 2 if s.rest_length \
+                else 0.5 * s.stiffness * (d @ d)
+        for k in self.tree.loaded:
+            j = self.tree.joints[k]
+            sj = self.scene.joints[j.source]
+            coord = (-1.0 if j.reversed else 1.0) * q[j.iq]
+            e += 0.5 * sj.stiffness * (coord - sj.rest) ** 2
+        return float(e)
+
+    def conservative(self) -> bool:
+        """Energy is conserved: no body forces or torques, no dampers or drives."""
+        if self.scene.forces or any(s.damping for s in self.scene.springs):
+            return False
+        return not any(j.damping or j.drive for j in self.scene.joints)
+
+
+def _local(bodies, body: int, point: np.ndarray) -> np.ndarray:
+    if body == WORLD:
+        return np.asarray(point, float)
+    b = bodies[body]
+    return b.rotation0.T @ (point - b.com0)
+
+
+def _point_state(kin: tr.Kinematics, body: int, local: np.ndarray):
+    if body == WORLD:
+        return local, np.zeros(3)
+    x = kin.com[body] + kin.rotation[body] @ local
+    return x, kin.V[body, 3:] + cross(kin.V[body, :3], x)
+
+
+def _lower_solve(chol: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    return np.linalg.solve(chol, rhs)
+
+
+def _min_norm(g: np.ndarray, chol: np.ndarray, residual: np.ndarray, fixed: set) -> np.ndarray:
+    """The tangent δ of least kinetic-energy norm with G δ = residual, δ_i = 0 for i in
+    ``fixed``: L⁻ᵀ (G L⁻ᵀ)⁺ residual on the free coordinates."""
+    nv = g.shape[1]
+    free = np.array([i for i in range(nv) if i not in fixed], dtype=int)
+    out = np.zeros(nv)
+    if free.size == 0:
+        return out
+    gf = g[:, free]
+    cf = np.linalg.cholesky(_sub(chol, free))
+    b = np.linalg.solve(cf, gf.T).T
+    uu, sv, vt = np.linalg.svd(b, full_matrices=False)
+    keep = sv > tolerances.CONSTRAINT_RANK_RTOL * (sv[0] if sv.size else 0.0)
+    z = vt[keep].T @ ((uu[:, keep].T @ residual) / sv[keep])
+    out[free] = np.linalg.solve(cf.T, z)
+    return out
+
+
+def _sub(chol: np.ndarray, free: np.ndarray) -> np.ndarray:
+    mass = chol @ chol.T
+    return mass[np.ix_(free, free)]

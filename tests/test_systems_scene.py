@@ -1,0 +1,116 @@
+"""System scenes: the bad inputs of issue 17 §6 are refused in one line naming file, line, key."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from massprops.dynamics.systems.run import prepare
+from massprops.dynamics.systems.scene import is_system_text, parse_system
+from massprops.errors import SceneError
+
+ROD = "{mass: 1.0, inertia: [[0.0834, 0, 0], [0, 0.0834, 0], [0, 0, 0.001]], "
+GOOD = f"""bodies:
+  upper: {ROD}position: [0, 0, -0.5]}}
+  lower: {ROD}position: [0, 0, -1.5]}}
+joints:
+  - {{name: shoulder, type: revolute, bodies: [world, upper], point: [0, 0, 0], axis: [0, 1, 0]}}
+  - {{name: elbow, type: revolute, bodies: [upper, lower], point: [0, 0, -1], axis: [0, 1, 0]}}
+time: {{duration: 1.0}}
+"""
+
+
+def _refused(text: str, tmp_path: Path) -> str:
+    with pytest.raises(SceneError) as info:
+        scene = parse_system(text, source="s.yaml", base_dir=tmp_path)
+        prepare(scene)
+    message = str(info.value)
+    assert "\n" not in message and message.startswith("s.yaml:")
+    return message
+
+
+def test_good_scene_reads(tmp_path):
+    scene = parse_system(GOOD, source="s.yaml", base_dir=tmp_path)
+    assert [b.name for b in scene.bodies] == ["upper", "lower"]
+    assert [j.name for j in scene.joints] == ["shoulder", "elbow"]
+    assert is_system_text(GOOD) and not is_system_text("body: {mass: 1}\n")
+
+
+@pytest.mark.parametrize("change, line, words", [
+    (("bodies: [world, upper]", "bodies: [world, uper]"), 5, "unknown body 'uper'"),
+    (("bodies: [upper, lower]", "bodies: [lower]"), 6, "two bodies"),
+    (("position: [0, 0, -1.5]", "orientation: [1, 0, 0, 0]"), 3, "position"),
+    (("axis: [0, 1, 0]}\n  - {name: elbow", "axis: [0, 0, 0]}\n  - {name: elbow"), 5,
+     "zero-length axis"),
+    (("name: elbow", "name: shoulder"), 6, "duplicate joint name"),
+    (("{mass: 1.0", "{mass: -1.0"), 2, "positive"),
+])
+def test_refusals(tmp_path, change, line, words):
+    text = GOOD.replace(*change, 1)
+    message = _refused(text, tmp_path)
+    assert message.startswith(f"s.yaml:{line}:") and words in message, message
+
+
+def test_duplicate_body_refused(tmp_path):
+    text = GOOD.replace("lower: {", "upper: {", 1)
+    assert "duplicate body" in _refused(text, tmp_path)
+
+
+FOUR_BAR = Path(__file__).resolve().parent.parent / "sample_scenes" / "four_bar.yaml"
+
+
+def test_open_loop_refused_without_project(tmp_path):
+    text = FOUR_BAR.read_text().replace("  project_initial: true\n", "")
+    text = text.replace("rates: {A: 2.0}", "positions: {A: 0.2}")
+    message = _refused(text, tmp_path)
+    assert "open a closed loop" in message and "project_initial" in message
+    assert "initial.positions.A" in message
+
+
+def test_rate_on_fixed_joint_refused(tmp_path):
+    text = GOOD.replace("type: revolute, bodies: [upper, lower], point: [0, 0, -1], "
+                        "axis: [0, 1, 0]", "type: fixed, bodies: [upper, lower]")
+    text = text.replace("time:", "initial: {rates: {elbow: 1.0}}\ntime:")
+    message = _refused(text, tmp_path)
+    assert "cannot move" in message and "initial.rates.elbow" in message
+
+
+def test_cli_refusal_is_one_line_exit_1(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(GOOD.replace("bodies: [world, upper]", "bodies: [world, nobody]"))
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parent.parent)}
+    done = subprocess.run([sys.executable, "-m", "massprops", "simulate", str(path), "--json"],
+                          capture_output=True, text=True, env=env, timeout=60)
+    assert done.returncode == 1
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "bad.yaml:5:" in lines[0] and "nobody" in lines[0]
+    assert "Traceback" not in done.stderr
+
+
+@pytest.mark.slow  # a fresh process: imports, the run and its error-estimate companion
+def test_cli_json_contract(tmp_path):
+    path = tmp_path / "dp.yaml"
+    path.write_text(GOOD.replace("duration: 1.0", "duration: 0.2"))
+    out = tmp_path / "traj.csv"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parent.parent)}
+    done = subprocess.run([sys.executable, "-m", "massprops", "simulate", str(path), "--json",
+                           "--output", str(out)], capture_output=True, text=True, env=env,
+                          timeout=60)
+    assert done.returncode == 0, done.stderr
+    data = json.loads(done.stdout)
+    assert set(data["final"]["bodies"]) == {"upper", "lower"}
+    joint = data["final"]["joints"]["elbow"]
+    assert set(joint) >= {"type", "bodies", "coordinates", "rates", "force", "torque"}
+    assert joint["bodies"] == ["upper", "lower"]
+    diag = data["diagnostics"]
+    assert diag["degrees_of_freedom"] == 2 and diag["redundant_constraints"] == 0
+    assert set(diag["constraint_residual"]) == {"position", "velocity"}
+    assert diag["energy_rel_drift"] is not None and diag["error_estimate"] is not None
+    header = out.read_text().splitlines()[0].split(",")
+    assert header[:4] == ["t", "upper.x", "upper.y", "upper.z"]
+    assert "elbow.q" in header and "elbow.u" in header and "elbow.tz" in header
