@@ -10,7 +10,7 @@ import numpy as np
 
 from massprops.cad.integrate import SolidIntegral, integrate_solid
 from massprops.cad.read import CadFile, CadSolid, read_cad
-from massprops.errors import MeshTopologyError, SceneError, UsageError
+from massprops.errors import MeshTopologyError, SceneError, UsageError, setting_ref
 from massprops.inertia import parallel_axis, principal_axes, rotate_inertia
 from massprops.mesh.facesums import U
 from massprops.mesh.integral import (
@@ -124,7 +124,8 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
     """
     check_density_mass(density, mass)
     if mass is not None and density_map:
-        raise UsageError("give --mass or --density-map, not both (a total mass fixes one "
+        raise UsageError(f"give {setting_ref('mass')} or {setting_ref('density_map')}, not both "
+                         "(a total mass fixes one "
                          "uniform density)")
     cad = read_cad(path, unit=unit)
     if not cad.solids:
@@ -135,7 +136,7 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
         if not solid.closed and not allow_open:
             raise MeshTopologyError(
                 f"{cad.name}: {solid.path} is an open shell, not a closed solid: its volume "
-                "is undefined; close it in the CAD tool, or pass --allow-open")
+                f"is undefined; close it in the CAD tool, or pass {setting_ref('allow_open')}")
         integrals.append(integrate_solid(solid.shape, cad.scale, f"{cad.name}: {solid.path}",
                                          only_closed=solid.closed))
     densities, warnings = _densities(cad, density_map or [], density)

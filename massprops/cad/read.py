@@ -16,7 +16,13 @@ from typing import Any
 import numpy as np
 
 from massprops.cad.occ import quiet_stdout, require_occ
-from massprops.errors import MeshFileError, MeshFormatError, UnknownFormatError, UsageError
+from massprops.errors import (
+    MeshFileError,
+    MeshFormatError,
+    UnknownFormatError,
+    UsageError,
+    setting_ref,
+)
 
 __all__ = ["CadFile", "CadSolid", "UNIT_METRES", "read_cad"]
 
@@ -120,8 +126,9 @@ def _read_xcaf(name: str, fmt: str, unit: str | None) -> CadFile:
 
     file_unit, occ_unit = _file_unit(name, fmt)
     if unit is not None and unit != file_unit:
-        raise UsageError(f"{name}: --unit {unit} disagrees with the file's own unit "
-                         f"({file_unit}); drop --unit (the file says what its numbers mean)")
+        raise UsageError(f"{name}: {setting_ref('unit')} {unit} disagrees with the file's own "
+                         f"unit ({file_unit}); drop {setting_ref('unit')} (the file says what its "
+                         "numbers mean)")
     previous = Interface_Static.CVal_s("xstep.cascade.unit")
     Interface_Static.SetCVal_s("xstep.cascade.unit", occ_unit)  # keep the file's numbers
     try:

@@ -134,10 +134,10 @@ class ModelReport:
         elsewhere = [r.name for r in self.links if r.computed is not None
                      and r.link.node.file is not None and r.link.node.file not in own]
         if elsewhere:
-            raise UsageError(f"{self.name}: --write edits this file only, but link(s) "
-                             f"{', '.join(elsewhere[:3])} come from an included or attached "
-                             "file; write the inertials there by hand or save the compiled "
-                             "model (mujoco.mj_saveLastXML) first")
+            raise UsageError(f"{self.name}: {setting_ref('write')} edits this file only, but "
+                             f"link(s) {', '.join(elsewhere[:3])} come from an included or "
+                             "attached file; write the inertials there by hand or save the "
+                             "compiled model (mujoco.mj_saveLastXML) first")
         data = edited_bytes(self.model.data, self.model.format, edits)
         write_description(data, out, source=self.model.path, force=force)
         return len(edits)
@@ -258,7 +258,8 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         elif model.format == "mjcf":
             masses = weights
         else:
-            return skipped("no stated mass to keep and no --density: give --density RHO "
+            return skipped(f"no stated mass to keep and no {setting_ref('density')}: give "
+                           f"{setting_ref('density')} RHO "
                            "(kg/m³)", False)
     computed = combine(parts, masses, total)
     if stated is None:

@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from massprops.errors import RobotModelError
+from massprops.errors import RobotModelError, setting_ref
 from massprops.robot.uris import resolve_uri
 from massprops.robot.xmltree import Node, parse_xml
 
@@ -63,7 +63,7 @@ def _model_file(target: Path, where: Path, node: Node, uri: str) -> Path:
         return target
     if not target.is_dir():
         raise RobotModelError(f"{where}:{node.line}: <include> {uri!r}: {target} does not "
-                              "exist; fix the URI or give --package-path")
+                              f"exist; fix the URI or give {setting_ref('package_path')}")
     config = target / "model.config"
     if config.is_file():
         croot, _ = parse_xml(config)

@@ -13,7 +13,7 @@ import contextlib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from massprops.errors import MassPropsError, RobotModelError
+from massprops.errors import MassPropsError, RobotModelError, setting_ref
 
 __all__ = ["EXPANDED", "expand_xacro", "has_xacro", "is_xacro"]
 
@@ -52,7 +52,8 @@ def expand_xacro(path: Path, args: Mapping[str, str] | None = None,
         except Exception as exc:  # xacro raises XacroException, its own and the XML parser's
             text = " ".join(str(exc).split()) or type(exc).__name__
             raise RobotModelError(f"{path}: xacro failed: {text}; fix the file or give the "
-                                  "missing argument with --xacro-arg NAME:=VALUE") from exc
+                                  f"missing argument with {setting_ref('xacro_arg')} "
+                                  "NAME:=VALUE") from exc
     return doc.toprettyxml(indent="  ", encoding="utf-8")
 
 
