@@ -6,6 +6,11 @@ import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, BinaryIO
 
+# numpy first, before the readers' package: imported from inside massprops.io's initialisation
+# under the CLI, numpy's own typing modules took ~13 ms longer and `python -m massprops inspect`
+# ~30 ms longer (measured, docs/performance.md; the cause inside numpy was not found)
+import numpy  # noqa: F401
+
 from massprops.errors import MassPropsError
 from massprops.io import read_mesh
 from massprops.mesh import Mesh
