@@ -38,7 +38,6 @@ from massprops.dynamics.yamlnodes import (
     Field,
     compose,
     is_null,
-    is_str,
     one_line,
     read_boolean,
     read_choice,
@@ -49,6 +48,7 @@ from massprops.dynamics.yamlnodes import (
     read_optional_mapping,
     read_positive,
     read_string,
+    read_type,
     read_vector,
     readonly_array,
     shown,
@@ -284,15 +284,9 @@ A new kind of force is one entry here."""
 
 def _force(item: Field) -> ForceTerm:
     known = tuple(FORCE_TYPES)
-    if not isinstance(item.node, yaml.MappingNode):
-        raise item.error(f"expected a mapping such as {{type: gravity, g: [0, 0, -9.81]}}, "
-                         f"got {shown(item.node)}")
-    type_nodes = [v for k, v in item.node.value if is_str(k) and k.value == "type"]
-    if not type_nodes:
-        raise item.child(item.node, "type").error(f"missing; every force needs a type, one of: "
-                                                  f"{', '.join(known)}")
-    type_field = item.child(type_nodes[0], "type")
-    name = read_choice(type_field, known, "force type")
+    name = read_type(item, known, "force type",
+                     expected="expected a mapping such as {type: gravity, g: [0, 0, -9.81]}",
+                     missing="missing; every force needs a type, one of: ")
     cls, parse_fields = FORCE_TYPES[name]
     return cls(**parse_fields(item))
 

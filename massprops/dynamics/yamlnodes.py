@@ -235,6 +235,19 @@ def read_choice(field: Field, options: Sequence[str], what: str = "value") -> st
     return value
 
 
+def read_type(item: Field, known: Sequence[str], what: str, *, expected: str,
+              missing: str) -> str:
+    """The ``type`` of a list item that must be a mapping (a force, a joint), one of ``known``.
+    ``expected`` starts the error for an item that is no mapping (", got ..." follows);
+    ``missing`` the error for a mapping without ``type`` (the known types follow)."""
+    if not isinstance(item.node, yaml.MappingNode):
+        raise item.error(f"{expected}, got {shown(item.node)}")
+    types = [v for k, v in item.node.value if is_str(k) and k.value == "type"]
+    if not types:
+        raise item.child(item.node, "type").error(f"{missing}{', '.join(known)}")
+    return read_choice(item.child(types[0], "type"), known, what)
+
+
 def read_boolean(field: Field) -> bool:
     node = field.node
     if not (isinstance(node, yaml.ScalarNode) and node.tag == _BOOL):

@@ -20,12 +20,11 @@ from massprops.dynamics.model import Scene
 from massprops.dynamics.yamlnodes import (
     Field,
     is_null,
-    is_str,
     read_boolean,
-    read_choice,
     read_mapping,
     read_non_negative,
     read_number,
+    read_type,
     read_vector,
     readonly_array,
     shown,
@@ -93,14 +92,9 @@ def parse_joints(field: Field | None) -> tuple[tuple[Joint, ...], list[dict[str,
     known = tuple(JOINT_TYPES)
     for i, node in enumerate(field.node.value):
         item = field.child(node, i)
-        if not isinstance(node, yaml.MappingNode):
-            raise item.error("expected a mapping such as {type: spherical, anchor: [0, 0, 0]}, "
-                             f"got {shown(node)}")
-        types = [v for k, v in node.value if is_str(k) and k.value == "type"]
-        if not types:
-            raise item.child(node, "type").error(
-                f"missing; every joint needs a type, one of: {', '.join(known)}")
-        name = read_choice(item.child(types[0], "type"), known, "joint type")
+        name = read_type(item, known, "joint type",
+                         expected="expected a mapping such as {type: spherical, anchor: [0, 0, 0]}",
+                         missing="missing; every joint needs a type, one of: ")
         cls, keys, required, reader = JOINT_TYPES[name]
         fields = read_mapping(item, keys, required)
         joints.append(cls(**reader(fields)))

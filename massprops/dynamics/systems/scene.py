@@ -49,6 +49,7 @@ from massprops.dynamics.yamlnodes import (
     read_number,
     read_optional_mapping,
     read_string,
+    read_type,
     read_vector,
     readonly_array,
     shown,
@@ -201,13 +202,8 @@ def _joints(field: Field | None, index: dict, places: dict) -> tuple[SystemJoint
     out: list[SystemJoint] = []
     for i, node in enumerate(field.node.value):
         item = field.child(node, i)
-        if not isinstance(node, yaml.MappingNode):
-            raise item.error(f"expected a joint mapping, got {shown(node)}")
-        types = [v for k, v in node.value if is_str(k) and k.value == "type"]
-        if not types:
-            raise item.child(node, "type").error(
-                f"missing; one of: {', '.join(_JOINT_KEYS)}")
-        kind = read_choice(item.child(types[0], "type"), tuple(_JOINT_KEYS), "joint type")
+        kind = read_type(item, tuple(_JOINT_KEYS), "joint type",
+                         expected="expected a joint mapping", missing="missing; one of: ")
         keys = ("type", "name", "bodies", *_JOINT_KEYS[kind],
                 *(_ONE_AXIS_KEYS if kind in ONE_AXIS else ()))
         required = {"bodies": "bodies: [world, crank]",
@@ -268,14 +264,8 @@ def _forces(field: Field | None, index: dict):
         raise field.error(f"expected a list of forces, got {shown(field.node)}")
     for i, node in enumerate(field.node.value):
         item = field.child(node, i)
-        if not isinstance(node, yaml.MappingNode):
-            raise item.error(f"expected a force mapping, got {shown(node)}")
-        types = [v for k, v in node.value if is_str(k) and k.value == "type"]
-        if not types:
-            raise item.child(node, "type").error("missing; one of: gravity, force, torque, "
-                                                 "spring")
-        kind = read_choice(item.child(types[0], "type"),
-                           ("gravity", "force", "torque", "spring"), "force type")
+        kind = read_type(item, ("gravity", "force", "torque", "spring"), "force type",
+                         expected="expected a force mapping", missing="missing; one of: ")
         if kind == "gravity":
             f = read_mapping(item, ("type", "g"), {"g": "g: [0, 0, -9.81]"})
             gravity = gravity + read_vector(f["g"])
