@@ -55,7 +55,7 @@ def build_tree(scene: SystemScene) -> Tree:
         for node in frontier:
             for k in order:
                 j = scene.joints[k]
-                if k in used or j.kind == "distance" or node not in (j.a, j.b):
+                if k in used or j.kind == "distance" or j.loop or node not in (j.a, j.b):
                     continue
                 other = j.b if j.a == node else j.a
                 if other in placed:
