@@ -9,8 +9,9 @@ point and axes in the model frame are ``poses[child] ∘ frame``. Coordinates fo
 (and the systems engine): a one-axis joint's coordinate is the turn (rad, right hand) or the
 shift (m) of the child relative to the parent about or along the axis.
 
-Readers: URDF here; SDF in `joints_sdf`, MJCF in `joints_mjcf`. `read_mechanism` dispatches on
-the parsed `RobotModel`. Each refusal is one line naming the file, the line and the element.
+Readers: URDF here; SDF in `joints_sdf`, MJCF in `joints_mjcf`; `mechanism.read_mechanism`
+dispatches on the parsed `RobotModel`. Each refusal is one line naming the file, the line and
+the element.
 """
 
 from __future__ import annotations
@@ -21,12 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.robot.model import RobotModel
 from massprops.robot.poses import rpy_matrix
 from massprops.robot.values import Values
 from massprops.robot.xmltree import Node
 
-__all__ = ["KINDS", "WORLD_LINK", "Mechanism", "RobotJoint", "read_mechanism"]
+__all__ = ["KINDS", "WORLD_LINK", "Mechanism", "RobotJoint", "urdf_mechanism"]
 
 Pose = tuple[np.ndarray, np.ndarray]
 WORLD_LINK = "world"
@@ -84,25 +84,6 @@ class Mechanism:
     floating: frozenset = frozenset()
     gravity: np.ndarray | None = None
     notes: tuple[str, ...] = field(default=())
-
-
-def read_mechanism(model: RobotModel) -> Mechanism:
-    """The joints and link poses of a parsed description (`analyze.load_model`)."""
-    if not model.links:
-        raise Values(model.path).error(Node("robot", {}, 1, 0, 0), "no links: nothing moves")
-    root = model.links[0].node
-    while root.parent is not None:
-        root = root.parent
-    names = [link.name for link in model.links]
-    if model.format == "urdf":
-        return urdf_mechanism(root, model.path, names)
-    if model.format == "sdf":
-        from massprops.robot.joints_sdf import sdf_mechanism  # a description loads its own reader
-
-        return sdf_mechanism(root, model.path, names)
-    from massprops.robot.joints_mjcf import mjcf_mechanism  # a description loads its own reader
-
-    return mjcf_mechanism(root, model.path, names)
 
 
 def compose(a: Pose, b: Pose) -> Pose:

@@ -25,7 +25,8 @@ import numpy as np
 
 from massprops.dynamics.systems.model import WORLD, SystemBody, SystemJoint
 from massprops.errors import RobotModelError
-from massprops.robot.joints import WORLD_LINK, Mechanism, RobotJoint, compose, read_mechanism
+from massprops.robot.joints import WORLD_LINK, Mechanism, RobotJoint, compose
+from massprops.robot.mechanism import read_mechanism
 
 __all__ = ["Description", "describe"]
 
