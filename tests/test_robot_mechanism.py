@@ -155,3 +155,51 @@ def test_cli_runs_a_description_for_a_while(tmp_path, run):
     assert data["diagnostics"]["energy_rel_drift"] < 1e-8
     # falling from horizontal: both joints turn down (+y turns x toward -z)
     assert data["final"]["joints"]["q1"]["coordinates"][0] > 0
+
+
+BOX_ARM = """<robot name="boxes">
+  <link name="base"/>
+  <link name="arm">
+    <inertial><origin xyz="0.9 0 0"/><mass value="3"/>
+      <inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>
+    <collision><origin xyz="0.25 0 0"/><geometry><box size="0.5 0.1 0.1"/></geometry></collision>
+  </link>
+  <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
+    <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+def test_inertials_stated_or_computed(tmp_path):
+    (tmp_path / "boxes.urdf").write_text(BOX_ARM)
+    for inertials, reach in (("stated", 0.9), ("computed", 0.25)):
+        (tmp_path / "s.yaml").write_text(f"model: boxes.urdf\ninertials: {inertials}\n"
+                                         "forces: [{type: gravity, g: [0, 0, -9.81]}]\n"
+                                         "time: {duration: 1}\n")
+        scene = load_any_system(tmp_path / "s.yaml")
+        body = scene.bodies[0]
+        assert body.mass == 3.0 and body.com0[0] == pytest.approx(reach, rel=1e-14)
+        if inertials == "computed":  # a uniform 0.5 x 0.1 x 0.1 box of 3 kg
+            assert body.inertia[1, 1] == pytest.approx(3 * (0.5**2 + 0.1**2) / 12, rel=1e-12)
+        scene = dataclasses.replace(scene, time=dataclasses.replace(scene.time, duration=0))
+        held = simulate_system(scene).as_dict()["final"]["joints"]["hinge"]["holding"][0]
+        assert held == pytest.approx(-3 * 9.81 * reach, rel=1e-13)
+
+
+@pytest.mark.slow
+def test_floating_base_falls_with_its_centre_of_mass_at_g(tmp_path):
+    """base: floating frees the root: whatever the joints do inside, the whole arm's centre of
+    mass moves as a stone thrown, c0 + v0 t + g t²/2 (no other external force)."""
+    (tmp_path / "arm.urdf").write_text(ra.urdf())
+    (tmp_path / "f.yaml").write_text(
+        f"model: arm.urdf\nbase: floating\ninitial: {{rates: {json.dumps(U0)}}}\n"
+        "forces: [{type: gravity, g: [0, 0, -9.81]}]\ntime: {duration: 0.3}\n")
+    scene = load_any_system(tmp_path / "f.yaml")
+    assert scene.bodies[0].name == "base_footprint"  # the lumped base floats
+    result = simulate_system(scene, estimate=False)
+    masses = np.array([b.mass for b in scene.bodies])
+    s = result.samples
+    com = (masses[:, None] * s.position).sum(axis=1) / masses.sum()
+    v0 = (masses[:, None] * s.velocity[0]).sum(axis=0) / masses.sum()  # the joints' share
+    t = s.t[:, None]
+    expected = com[0] + v0 * t + np.array([0.0, 0.0, -9.81]) * t**2 / 2
+    assert np.abs(com - expected).max() < 1e-9

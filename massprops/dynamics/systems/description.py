@@ -60,8 +60,9 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
     from massprops.robot.analyze import analyze_model, load_model
 
     path = Path(path)
-    model, masses, warnings = None, {}, []
-    if inertials == "computed" or path.suffix.lower() == ".xml" or _is_mjcf(path):
+    masses, warnings = {}, []
+    model = load_model(path, package_paths=package_paths)
+    if inertials == "computed" or model.format == "mjcf":
         report = analyze_model(path, package_paths=package_paths)
         model = report.model
         if inertials == "computed" and report.errors:
@@ -73,8 +74,9 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
             if use is not None:
                 masses[r.name] = (use.mass, np.asarray(use.center_of_mass, float),
                                   np.asarray(use.inertia, float))
+            elif inertials == "computed" and r.link.geometries:
+                warnings.append(f"link {r.name!r}: no mass ({r.reason})")
     else:
-        model = load_model(path, package_paths=package_paths)
         for link in model.links:
             if link.stated is not None:
                 s = link.stated
@@ -82,14 +84,6 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
     mech = read_mechanism(model)
     warnings += _said(mech, path)
     return _build(mech, masses, base, warnings, path)
-
-
-def _is_mjcf(path: Path) -> bool:
-    try:
-        with open(path, "rb") as handle:
-            return b"<mujoco" in handle.read(4096)
-    except OSError:
-        return False
 
 
 def _said(mech: Mechanism, path: Path) -> list[str]:
