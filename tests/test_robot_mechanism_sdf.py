@@ -120,6 +120,19 @@ def test_massless_link_moved_by_a_joint_is_refused(tmp_path, run):
     assert "'tool'" in result.stderr and "'j'" in result.stderr and "r.urdf:2" in result.stderr
 
 
+def test_singular_mass_matrix_is_refused(tmp_path, run):
+    path = tmp_path / "r.urdf"
+    path.write_text('<robot name="r"><link name="a"/><link name="mid"/><link name="arm">'
+                    '<inertial><origin xyz="0.5 0 0"/><mass value="1"/><inertia ixx="0.01" '
+                    'ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>'
+                    '<joint name="j1" type="continuous"><parent link="a"/><child link="mid"/>'
+                    '<axis xyz="0 1 0"/></joint><joint name="j2" type="continuous">'
+                    '<parent link="mid"/><child link="arm"/><axis xyz="0 1 0"/></joint></robot>')
+    result = run("simulate", path, "--duration", "0")
+    assert result.exit_code == 1
+    assert "singular" in result.stderr and "j1, j2" in result.stderr
+
+
 def test_one_body_scene_refuses_duration(tmp_path, run):
     scene = tmp_path / "s.yaml"
     scene.write_text("body: {mass: 1, inertia: [[1, 0, 0], [0, 2, 0], [0, 0, 3]]}\n"

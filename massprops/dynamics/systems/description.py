@@ -23,7 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
+from massprops.dynamics.systems.assemble import build_tree, initial_coordinates
 from massprops.dynamics.systems.model import WORLD, SystemBody, SystemJoint
+from massprops.dynamics.systems.tree import kinematics, mass_matrix
 from massprops.errors import RobotModelError
 from massprops.robot.joints import WORLD_LINK, Mechanism, RobotJoint, compose
 from massprops.robot.mechanism import read_mechanism
@@ -228,3 +230,28 @@ def _check_masses(bodies, joints, heads, path: Path, mech: Mechanism) -> None:
                               f"{heads[i]!r} and what it carries have no mass, but {what}: the "
                               "motion is undefined; give the link an inertial or make the "
                               "joint fixed")
+
+
+_SINGULAR = 1e-12  # λ_min / λ_max of the mass matrix below which a motion carries no inertia
+# (written inertials are ~1e-6 at the least against ~1e2 for a whole arm: far above round-off)
+
+
+def check_mass_matrix(scene) -> None:
+    """RobotModelError (one line) when the mass matrix at the start (the engine's own assembly
+    and CRBA, as the run will use them) is singular: some joint motion moves no mass and no
+    inertia (two joints on one axis with a massless link between)."""
+    tree = build_tree(scene)
+    if tree.nv == 0:
+        return
+    q, _, _, _ = initial_coordinates(scene, tree)
+    matrix = mass_matrix(tree, kinematics(tree, q, np.zeros(tree.nv)))
+    values, vectors = np.linalg.eigh(matrix)
+    if values[0] > _SINGULAR * max(values[-1], 0.0):
+        return
+    weight = np.abs(vectors[:, 0])
+    names = [scene.joints[j.source].name if j.source is not None else "the floating base"
+             for j in tree.joints if j.nv and weight[j.iu:j.iu + j.nv].max() > 0.1 * weight.max()]
+    raise RobotModelError(f"{scene.robot}: the mass matrix is singular: joint(s) "
+                          f"{', '.join(names)} move no mass or inertia along one motion (e.g. "
+                          "two joints on one axis with a massless link between); give the "
+                          "links between them an inertial or make one joint fixed")

@@ -25,7 +25,13 @@ import numpy as np
 
 from massprops.dynamics.model import OutputSettings, TimeSettings
 from massprops.dynamics.scene import _output, _time
-from massprops.dynamics.systems.description import BASES, INERTIALS, Description, describe
+from massprops.dynamics.systems.description import (
+    BASES,
+    INERTIALS,
+    Description,
+    check_mass_matrix,
+    describe,
+)
 from massprops.dynamics.systems.model import SystemInitial, SystemScene
 from massprops.dynamics.systems.scene import _forces, _initial, parse_system
 from massprops.dynamics.yamlnodes import Field, compose, read_choice, read_mapping, read_string
@@ -98,6 +104,8 @@ def _scene(desc: Description, gravity, forces, springs, initial, time, output, s
                          "(base: floating frees the base)")
     gravity = np.array(gravity, float)
     gravity.setflags(write=False)
-    return SystemScene(desc.bodies, desc.joints, gravity, tuple(forces), tuple(springs),
-                       initial, time, output, source=source, input_files=(desc.path,),
-                       warnings=desc.warnings, places=places, robot=os.fspath(desc.path))
+    scene = SystemScene(desc.bodies, desc.joints, gravity, tuple(forces), tuple(springs),
+                        initial, time, output, source=source, input_files=(desc.path,),
+                        warnings=desc.warnings, places=places, robot=os.fspath(desc.path))
+    check_mass_matrix(scene)
+    return scene
