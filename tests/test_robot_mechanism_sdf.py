@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 
 from massprops.dynamics.systems.description import describe
+from massprops.dynamics.systems.robot_scene import description_scene
+from massprops.errors import SceneError
 
 INERTIAL = ("<inertial>{pose}<mass>{m}</mass><inertia><ixx>0.01</ixx><ixy>0</ixy><ixz>0</ixz>"
             "<iyy>0.01</iyy><iyz>0</iyz><izz>0.01</izz></inertia></inertial>")
@@ -140,3 +142,35 @@ def test_one_body_scene_refuses_duration(tmp_path, run):
     result = run("simulate", scene, "--duration", "0.5")
     assert result.exit_code == 2
     assert "--duration" in result.stderr
+
+
+def test_sdf_ball_universal_nested_and_static(tmp_path):
+    link = "<link name='{}'><pose>{}</pose>" + INERTIAL.format(pose="", m=1) + "</link>"
+    text = f"""<sdf version="1.7"><model name="outer"><pose>0 0 1 0 0 0</pose>
+  {link.format("a", "0 0 0 0 0 0")}
+  <joint name="ball" type="ball"><parent>inner::c</parent><child>a</child>
+    <pose>0 0 0.5 0 0 0</pose></joint>
+  <model name="inner"><pose>1 0 0 0 0 0</pose>
+    {link.format("b", "0 2 0 0 0 0")}
+    {link.format("c", "0 0 0 0 0 0")}
+    <joint name="u" type="universal"><parent>b</parent><child>c</child>
+      <axis><xyz>1 0 0</xyz></axis><axis2><xyz>0 1 0</xyz></axis2></joint>
+  </model>
+</model></sdf>"""
+    (tmp_path / "n.sdf").write_text(text)
+    desc = describe(tmp_path / "n.sdf")
+    joints = {j.name: j for j in desc.joints}
+    assert joints["ball"].kind == "spherical"
+    # a at the outer model's (0, 0, 1); the ball's pose is in a's (the child's) frame
+    assert np.allclose(joints["ball"].point, [0, 0, 1.5], atol=1e-15)
+    # c sits in the inner model, placed at (1, 0, 0) in the outer one; b is the root (welded)
+    u = joints["outer::inner::u"]
+    assert u.kind == "universal"
+    assert np.allclose(u.point, [1, 0, 1], atol=1e-15)
+    assert np.allclose(u.axes, [[1, 0, 0], [0, 1, 0]], atol=1e-15)
+    assert [b.name for b in desc.bodies] == ["a", "outer::inner::c"]
+    (tmp_path / "s.sdf").write_text(text.replace("<pose>0 0 1 0 0 0</pose>",
+                                                 "<static>true</static><pose>0 0 1 0 0 0</pose>",
+                                                 1))
+    with pytest.raises(SceneError, match="nothing moves"):
+        description_scene(tmp_path / "s.sdf", duration=0)

@@ -8,7 +8,9 @@ the model frame) or ``<xyz expressed_in="F">`` (1.7+: frame F). A nested model's
 ``outer::inner::link``; the model's own ``<pose>`` places it in its parent model (the
 top-level one in the world). Kinds: revolute, continuous (no limits), prismatic, fixed, ball,
 universal (``axis`` fixed in the parent, ``axis2`` in the child); revolute2, screw and gearbox
-are refused. Limits of ±1e16 (SDF's "none") are no limits.
+are refused. Limits of ±1e16 (SDF's "none") are no limits. A ``<static>true`` model's joints
+(its nested models' too) are all welds. A joint's <parent>/<child> may name a nested model's link
+as ``inner::link``; its child must be in the joint's own model.
 """
 
 from __future__ import annotations
@@ -61,27 +63,58 @@ def sdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
         for link in model.findall("link"):
             poses[prefix + link.attrs.get("name", "")] = compose(
                 placed, graph.in_model(link.attrs.get("name", "")))
+        static = _static(model)
+        full = "".join(n + "::" for n in _names(model))
         for node in model.findall("joint"):
-            joints.append(_joint(node, prefix, graph, v, version, set(links), notes))
+            joint = _joint(node, (prefix, full), graph, v, version, set(links), notes)
+            if static:  # a static model does not move: every joint is a weld
+                joint = RobotJoint(joint.name, "fixed", joint.parent, joint.child, joint.frame,
+                                   np.zeros((0, 3)), joint.node)
+            joints.append(joint)
     return Mechanism(path, "sdf", tuple(joints), poses, frozenset(), None,
                      tuple(sorted(notes)))
 
 
-def _end(node: Node, tag: str, prefix: str, links: set, v: Values, name: str) -> str:
+def _static(model: Node) -> bool:
+    """``<static>true`` on the model or any model enclosing it."""
+    node = model
+    while node is not None and node.tag == "model":
+        flag = node.find("static")
+        if flag is not None and flag.text.strip().lower() in ("true", "1"):
+            return True
+        node = node.parent
+    return False
+
+
+def _names(model: Node) -> list[str]:
+    """The names of ``model`` and its enclosing models, outermost first."""
+    out = []
+    node = model
+    while node is not None and node.tag == "model":
+        out.append(node.attrs.get("name", "?"))
+        node = node.parent
+    return out[::-1]
+
+
+def _end(node: Node, tag: str, scopes: tuple[str, str], links: set, v: Values,
+         name: str) -> str:
+    """The link a joint's <parent>/<child> names: in the joint's model (its links' prefix), or
+    a nested model's link written ``inner::link`` (scoped by every enclosing model's name)."""
     el = node.find(tag)
     text = "" if el is None else el.text.strip()
     if not text:
         raise v.error(node, f"joint {name!r} needs <{tag}>link name</{tag}>")
     if text == WORLD_LINK and tag == "parent":
         return WORLD_LINK
-    if prefix + text not in links:
-        raise v.error(el, f"joint {name!r}: no link named {text!r} in this model; check the "
-                          "spelling")
-    return prefix + text
+    for scope in scopes:
+        if scope + text in links:
+            return scope + text
+    raise v.error(el, f"joint {name!r}: no link named {text!r} in this model; check the "
+                      "spelling")
 
 
-def _joint(node: Node, prefix: str, graph: _FrameGraph, v: Values, version, links: set,
-           notes: set) -> RobotJoint:
+def _joint(node: Node, scopes: tuple[str, str], graph: _FrameGraph, v: Values, version,
+           links: set, notes: set) -> RobotJoint:
     name = node.attrs.get("name", "")
     if not name:
         raise v.error(node, 'a joint needs a name="..."')
@@ -90,10 +123,11 @@ def _joint(node: Node, prefix: str, graph: _FrameGraph, v: Values, version, link
         raise v.error(node, f"joint {name!r}: type {written!r} is not supported by the systems "
                             f"engine; use one of {', '.join(_KINDS)}")
     kind = _KINDS[written]
-    parent = _end(node, "parent", prefix, links, v, name)
-    child = _end(node, "child", prefix, links, v, name)
-    local_child = child[len(prefix):]
-    if "::" in local_child:
+    prefix = scopes[0]
+    parent = _end(node, "parent", scopes, links, v, name)
+    child = _end(node, "child", scopes, links, v, name)
+    local_child = child[len(prefix):] if child.startswith(prefix) else child
+    if "::" in local_child or not child.startswith(prefix):
         raise v.error(node, f"joint {name!r}: a child link inside a nested model "
                             f"({local_child!r}) is not supported; put the joint in that model")
     in_model = graph.in_model(name)
