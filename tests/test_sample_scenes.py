@@ -89,7 +89,7 @@ def test_scene_opens_with_its_story_and_the_readme_names_autos_choice(name):
     lines = (SCENES / f"{name}.yaml").read_text(encoding="utf-8").splitlines()
     story = lines[:next(i for i, line in enumerate(lines) if not line.startswith("#"))]
     assert len(story) >= 8 and any("What is right" in line for line in story)
-    if any(line.startswith("bodies:") for line in lines):  # a system: its own dop853
+    if any(line.startswith(("bodies:", "model:")) for line in lines):  # a system: dop853
         picked = "dop853"
     else:
         loaded = scene(name)

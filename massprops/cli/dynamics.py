@@ -84,12 +84,16 @@ class _Progress:
 @click.option("--max-steps", type=click.IntRange(min=1), default=None,
               help="Steps a run may take (default 2e7); beyond it the run is refused or "
                    "stopped, keeping what it computed.")
+@click.option("--duration", type=click.FloatRange(min=0), default=None,
+              help="Seconds to run a robot description or a system scene (overrides "
+                   "time.duration; 0: the start pose's reactions and holding torques).")
 @click.pass_context
 def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: str | None,
              integrator: str | None, rtol: float | None, step: float | None,
              every: float | None, plot_path: str | None, force: bool, quiet: bool,
-             max_steps: int | None) -> None:
-    """Integrate the Newton-Euler equations of the one body in SCENE (YAML, SI units)."""
+             max_steps: int | None, duration: float | None) -> None:
+    """Integrate the Newton-Euler equations of the one body in SCENE (YAML, SI units), of a
+    system of bodies, or of a robot description (ROBOT.urdf|.sdf|.xml) under gravity."""
     interrupted = []
 
     def run() -> None:
@@ -104,10 +108,15 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             from massprops.dynamics.plots import require_matplotlib
 
             require_matplotlib()
-        if _is_system(scene_path):  # a `bodies:` scene: the systems package runs it
+        if _is_system(scene_path):  # `bodies:`, `model:` or a description: the systems package
             _simulate_system(scene_path, as_json, output_path, integrator, rtol, every, force,
-                             plot_path)
+                             plot_path, duration)
             return
+        if duration is not None:
+            from massprops.errors import UsageError, setting_ref  # deferred: rare path
+
+            raise UsageError(f"{scene_path}: {setting_ref('duration')} applies to systems and "
+                             "robot descriptions; set time.duration in a one-body scene")
         scene = load_scene(scene_path)
         for w in scene.warnings:
             say_warning(scene.body_source, w)
@@ -179,9 +188,9 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
         if _is_system(scene_path):  # a `bodies:` scene: the systems package's own ladder
             # deferred: only a system scene needs them
             from massprops.dynamics.systems.precision import precision_system
-            from massprops.dynamics.systems.scene import load_system
+            from massprops.dynamics.systems.robot_scene import load_any_system
 
-            scene = load_system(scene_path)
+            scene = load_any_system(scene_path)
             report = precision_system(scene)
             _emit_precision(report, scene_path, plot_path, as_json, force, scene.input_files)
             return
@@ -225,8 +234,12 @@ def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
 
 
 def _is_system(scene_path: str) -> bool:
-    from massprops.dynamics.systems.scene import is_system_text  # deferred: start-up cost
+    # deferred: start-up cost
+    from massprops.dynamics.systems.robot_scene import is_description
+    from massprops.dynamics.systems.scene import is_system_text
 
+    if is_description(scene_path):
+        return True
     try:
         with open(scene_path, encoding="utf-8-sig") as handle:
             return is_system_text(handle.read())
@@ -236,13 +249,25 @@ def _is_system(scene_path: str) -> bool:
 
 def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
                      integrator: str | None, rtol: float | None, every: float | None,
-                     force: bool, plot_path: str | None = None) -> None:
-    """A system scene: run, write the trajectory, print JSON or a short summary."""
+                     force: bool, plot_path: str | None = None,
+                     duration: float | None = None) -> None:
+    """A system scene or a robot description: run, write the trajectory, print JSON or a short
+    summary."""
     # deferred, as the one-body path's imports: only a system scene needs them
+    from massprops.dynamics.systems.robot_scene import (
+        description_scene,
+        is_description,
+        load_any_system,
+    )
     from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
-    from massprops.dynamics.systems.scene import load_system
+    from massprops.dynamics.systems.scene import with_time
 
-    scene = load_system(scene_path)
+    if is_description(scene_path):
+        scene = description_scene(scene_path, duration=1.0 if duration is None else duration)
+    else:
+        scene = load_any_system(scene_path)
+        if duration is not None:
+            scene = with_time(scene, duration=duration)
     for w in scene.warnings:
         say_warning(scene_path, w)
     out = output_path or scene.output.file
@@ -268,8 +293,9 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
                f"{diag['degrees_of_freedom']} degrees of freedom; t = {data['final']['t']:g} s "
                f"in {data['steps']} steps; error estimate {diag['error_estimate']}")
     for name, joint in data["final"]["joints"].items():
+        held = f", holding {joint['holding']}" if "holding" in joint else ""
         click.echo(f"  {name} ({joint['type']}): q = {joint['coordinates']}, "
-                   f"force {joint['force']} N, torque {joint['torque']} N·m")
+                   f"force {joint['force']} N, torque {joint['torque']} N·m{held}")
 
 
 def _emit_precision(report: Any, scene_path: str, plot_path: str | None, as_json: bool,

@@ -2,8 +2,9 @@
 
 The tree is grown breadth-first from the world. Joints the scene names in ``initial`` or that
 carry loads (damping, a spring, a drive) are taken first, so they stay tree joints whose
-coordinates are integrated; a distance joint is always cut; a body that nothing joins to the
-world gets a free joint (a floating base). Every refusal names the scene's file, line and key.
+coordinates are integrated; a distance joint and a description's loop joint are always cut; in
+each part that nothing joins to the world the first body gets a free joint (a floating base)
+and the tree grows from it. Every refusal names the scene's file, line and key.
 """
 
 from __future__ import annotations
@@ -50,12 +51,17 @@ def build_tree(scene: SystemScene) -> Tree:
     placed, frontier = {WORLD}, [WORLD]
     in_tree: list[tuple[int, int, int, bool]] = []  # (scene joint, parent, child, reversed)
     used = set()
-    while frontier:
+    free: list[int] = []
+    while frontier or len(placed) <= len(bodies):
+        if not frontier:  # the rest hangs on a floating base: the first unplaced body
+            free.append(next(i for i in range(len(bodies)) if i not in placed))
+            placed.add(free[-1])
+            frontier = [free[-1]]
         nxt = []
         for node in frontier:
             for k in order:
                 j = scene.joints[k]
-                if k in used or j.kind == "distance" or node not in (j.a, j.b):
+                if k in used or j.kind == "distance" or j.loop or node not in (j.a, j.b):
                     continue
                 other = j.b if j.a == node else j.a
                 if other in placed:
@@ -65,7 +71,6 @@ def build_tree(scene: SystemScene) -> Tree:
                 in_tree.append((k, node, other, j.a != node))
                 nxt.append(other)
         frontier = nxt
-    free = [i for i in range(len(bodies)) if i not in placed]
     joints, iq, iu = [], 0, 0
     for i in free:  # floating bases first: they are roots
         joints.append(TreeJoint("free", WORLD, i, np.zeros((0, 3)), np.zeros(3), np.zeros(3),

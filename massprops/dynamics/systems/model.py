@@ -49,7 +49,7 @@ class SystemJoint:
     axes (k, 3) unit, world at t = 0 (revolute, prismatic, cylindrical: 1; universal: 2);
     points (2, 3) the distance joint's end points on a and b (world, t = 0).
     damping N·m·s/rad or N·s/m; stiffness N·m/rad or N/m about ``rest``; drive N·m or N
-    while start <= t < end.
+    while start <= t < end. loop: never a tree joint (a robot description's closing joint).
     """
 
     name: str
@@ -65,6 +65,7 @@ class SystemJoint:
     drive: float = 0.0
     start: float = -math.inf
     end: float = math.inf
+    loop: bool = False  # always a cut joint (a description's loop-closing joint)
 
 
 @dataclass(frozen=True, eq=False)
@@ -122,6 +123,7 @@ class SystemScene:
     input_files: tuple[Path, ...] = ()
     warnings: tuple[str, ...] = ()
     places: dict = field(default_factory=dict)  # "initial.positions.A" -> "file:line: key: "
+    robot: str | None = None  # the description a `model:` scene names (outputs add `holding`)
 
     @property
     def size(self) -> float:

@@ -42,6 +42,7 @@ class SystemResult:
     diagnostics: dict
     scene: SystemScene
     notes: tuple[str, ...] = field(default=())
+    holding: list | None = None  # per scene joint: the static forces at the final pose
 
     def as_dict(self) -> dict:
         s, sc = self.samples, self.scene
@@ -55,7 +56,9 @@ class SystemResult:
         joints = {j.name: {"type": j.kind, "bodies": [_name(sc, j.a), _name(sc, j.b)],
                            "coordinates": s.coordinates[k][-1].tolist(),
                            "rates": s.rates[k][-1].tolist(),
-                           "force": s.force[-1, k].tolist(), "torque": s.torque[-1, k].tolist()}
+                           "force": s.force[-1, k].tolist(), "torque": s.torque[-1, k].tolist(),
+                           **({} if self.holding is None else
+                              {"holding": self.holding[k].tolist()})}
                   for k, j in enumerate(sc.joints)}
         return {"integrator": "dop853", "reason": "systems: adaptive 8th order with projection",
                 "steps": self.steps, "evaluations": self.evaluations,
@@ -78,7 +81,7 @@ def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
     if system.m:
         pos, vel = system.residual(y0)
         speed = max(float(np.abs(u).max(initial=0.0)) * tree.size, tree.size
-                    / scene.time.duration)
+                    / scene.time.duration if scene.time.duration else 0.0)
         bad_pos = pos > tolerances.JOINT_RTOL * tree.size
         bad_vel = vel > tolerances.JOINT_RTOL * speed
         if (bad_pos or bad_vel) and not scene.initial.project:
@@ -141,6 +144,8 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     rtol = float(rtol if rtol is not None else scene.time.rtol)
     system, y0, notes = prepare(scene)
     duration = scene.time.duration
+    if duration == 0:  # the start pose only (a description's static torques)
+        return _static(system, y0, notes)
     t_out = sample_times(duration, every if every is not None else scene.output.every,
                          scene.source)
     floors = _floors(system, duration)
@@ -180,8 +185,37 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
         if other.failure is None:
             companion = evaluate_states(system, t_out, other.y_out)
             diagnostics["error_estimate"] = distance(samples, companion, scene.size)
+    held = _holding(system, run.y_out[-1], notes)
     return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics, scene,
-                        tuple(notes))
+                        tuple(notes), held)
+
+
+def _holding(system: System, y: np.ndarray, notes: list[str]) -> list | None:
+    """A description's holding forces at the final state (holding.py), else None; with loops
+    a note says which split of the load it reports."""
+    if system.scene.robot is None:
+        return None
+    # deferred: only a description reports it
+    from massprops.dynamics.systems.holding import LOOP_RULE, holding
+
+    if system.m:
+        notes.append(f"{system.scene.source}: holding forces with closed loops: {LOOP_RULE}")
+    return holding(system, system.scene.time.duration, y)
+
+
+def _static(system: System, y0: np.ndarray, notes: list[str]) -> SystemResult:
+    """Duration 0: the start state's outputs and reactions, no integration."""
+    samples = evaluate(system, np.zeros(1), y0[None, :], with_energy=False)
+    pos, vel = system.residual(y0)
+    diagnostics = {"energy_rel_drift": None, "error_estimate": None,
+                   "constraint_residual": {"position": pos, "velocity": vel},
+                   "degrees_of_freedom": system.nv - system.rank,
+                   "redundant_constraints": system.m - system.rank,
+                   "projection": {"position": 0.0, "velocity": 0.0},
+                   "singularity_margin": None, "reactions": "unique" if system.m == system.rank
+                   else "minimum-norm multipliers"}
+    held = _holding(system, y0, notes)
+    return SystemResult(samples, 0, 1, 0, 0.0, diagnostics, system.scene, tuple(notes), held)
 
 
 def _energy_scale(system: System) -> float:

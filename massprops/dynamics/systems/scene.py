@@ -70,9 +70,9 @@ _ONE_AXIS_KEYS = ("damping", "stiffness", "rest", "torque", "force", "start", "e
 
 
 def is_system_text(text: str) -> bool:
-    """True when the YAML document has a top-level ``bodies:`` key (a system scene). Cheap: a
-    line scan, so the one-body path stays as it was."""
-    return any(line.startswith("bodies:") for line in text.splitlines())
+    """True when the YAML document has a top-level ``bodies:`` or ``model:`` key (a system
+    scene). Cheap: a line scan, so the one-body path stays as it was."""
+    return any(line.startswith(("bodies:", "model:")) for line in text.splitlines())
 
 
 def load_system(path: str | os.PathLike[str]) -> SystemScene:

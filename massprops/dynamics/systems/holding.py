@@ -1,0 +1,63 @@
+"""Holding forces: what each joint's motor must exert to keep a pose at rest (static torques).
+
+Inverse dynamics with zero rates and accelerations. The equations of motion M u̇ + h(q, u) =
+τ + τ_motor + Gᵀλ at u = 0, u̇ = 0 leave τ_motor = h(q, 0) - τ(q, 0, t) - Gᵀλ: h(q, 0) is the
+generalised weight and applied body loads (RNEA with the scene's forces at u = 0, via
+`tree.generalized`), τ the joints' own springs and drives at time t (dampers are idle at rest).
+On a tree G is empty and the answer is unique. With closed loops λ is free: the loop joints
+carry part of the load; massprops takes the λ that makes the motors' forces smallest in the
+Euclidean norm over the tree coordinates that are joints of the scene (a floating base's six
+are excluded: nothing actuates them, what remains there is the wrench a support must give), and
+says so in the output. Cut joints hold nothing (their entries are zeros). Units: N·m for a turn,
+N for a shift, one per rate coordinate, in the contract's signs (the scene joint's own).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from massprops.dynamics.systems import tree as tr
+from massprops.dynamics.systems.loops import terms
+
+__all__ = ["LOOP_RULE", "holding"]
+
+LOOP_RULE = ("minimum-norm: the loops' constraint forces take the load the motors need not "
+             "give; the motors' forces are the smallest (Euclidean norm) that hold the pose")
+
+
+def holding(system, t: float, y: np.ndarray) -> list[np.ndarray]:
+    """Per scene joint (scene order), the generalised forces (one per rate) its motor must exert
+    to hold the configuration of state ``y`` at rest at time ``t``."""
+    tree, scene = system.tree, system.scene
+    q = y[:system.nq]
+    rest = np.zeros(system.nv)
+    kin = tr.kinematics(tree, q, rest)
+    fext, tau = system.applied(t, kin, q, rest)
+    h = tr.generalized(tree, kin, tr.transmitted(tree, tr.body_forces(tree, kin, fext)))
+    motor = h - tau
+    if system.m:
+        g = terms(tree.prims, kin, tr.jacobians(tree, kin), system.nv, tree.size)[1]
+        act = np.array([i for j in tree.joints if j.kind != "free"
+                        for i in range(j.iu, j.iu + j.nv)], dtype=int)
+        if act.size:
+            lam = np.linalg.lstsq(g[:, act].T, motor[act], rcond=None)[0]
+            motor = motor - g.T @ lam
+    out = []
+    for k, sj in enumerate(scene.joints):
+        where, n = tree.of_scene[k]
+        count = {"revolute": 1, "prismatic": 1, "cylindrical": 2, "universal": 2,
+                 "spherical": 3}.get(sj.kind, 0)
+        if where == "cut":
+            out.append(np.zeros(count))
+            continue
+        j = tree.joints[n]
+        f = motor[j.iu:j.iu + j.nv]
+        if j.reversed:  # the scene's coordinates are the tree's turned around (assemble.py)
+            if j.kind == "spherical":
+                f = -tr.quat_matrix(q[j.iq:j.iq + 4]).T @ f
+            elif j.kind == "universal":
+                f = -f[::-1]
+            else:
+                f = -f
+        out.append(np.array(f, float))
+    return out

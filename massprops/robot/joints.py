@@ -1,0 +1,176 @@
+"""The robot as a mechanism: joints and link poses of a description, format-neutral.
+
+Frames. Every link frame's pose is given in the *model frame* at the zero pose (all joint
+coordinates 0): ``poses[name] = (A, t)`` with v_model = A v_link + t (m). Each joint's frame is
+fixed to its child link: ``frame = (A, t)`` places the joint frame in the child link frame (URDF:
+the identity, the child link frame *is* the joint frame); its ``axes`` are unit vectors in the
+joint frame. At the zero pose the joint frame is also where the parent carries it, so the joint's
+point and axes in the model frame are ``poses[child] ∘ frame``. Coordinates follow the formats
+(and the systems engine): a one-axis joint's coordinate is the turn (rad, right hand) or the
+shift (m) of the child relative to the parent about or along the axis.
+
+Readers: URDF here; SDF in `joints_sdf`, MJCF in `joints_mjcf`; `mechanism.read_mechanism`
+dispatches on the parsed `RobotModel`. Each refusal is one line naming the file, the line and
+the element.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from massprops.robot.poses import rpy_matrix
+from massprops.robot.values import Values
+from massprops.robot.xmltree import Node
+
+__all__ = ["KINDS", "WORLD_LINK", "Mechanism", "RobotJoint", "urdf_mechanism"]
+
+Pose = tuple[np.ndarray, np.ndarray]
+WORLD_LINK = "world"
+"""The parent name of a joint to the ground (URDF: a link called ``world``; SDF: ``world``;
+MJCF: ``<worldbody>``)."""
+
+KINDS = ("revolute", "prismatic", "fixed", "free", "spherical", "universal", "cylindrical")
+"""Joint kinds of the neutral model (the systems engine's, plus "free": no constraint)."""
+
+IDENTITY: Pose = (np.eye(3), np.zeros(3))
+
+
+@dataclass(frozen=True, eq=False)
+class RobotJoint:
+    """One joint of a description.
+
+    name : as written (MJCF: a body's several joints joined by "+"). kind : one of KINDS
+    ("continuous" is revolute without limits). parent, child : link names (parent may be
+    WORLD_LINK). frame : (A (3, 3), t (3,) m) the joint frame in the child link frame.
+    axes : (k, 3) unit, joint frame (revolute, prismatic, cylindrical: 1; universal: 2; else 0).
+    limits : ((lower, upper), ...) per coordinate, rad or m, or None (none stated).
+    damping : N·m·s/rad or N·s/m. stiffness : N·m/rad or N/m about ``rest`` (MJCF springs).
+    loop : a closing joint (MJCF ``<equality><connect>``), not part of the description's tree.
+    node : the element it came from (line numbers).
+    """
+
+    name: str
+    kind: str
+    parent: str
+    child: str
+    frame: Pose
+    axes: np.ndarray
+    node: Node
+    limits: tuple | None = None
+    damping: float = 0.0
+    stiffness: float = 0.0
+    rest: float = 0.0
+    loop: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class Mechanism:
+    """The joints of a description and every link's pose in the model frame at the zero pose.
+
+    floating : links that the description itself sets free (an MJCF ``<freejoint>``, a URDF
+    ``floating`` joint). gravity : (3,) m/s² the description states (MJCF ``<option
+    gravity>``), else None. notes : what the description holds that a simulation ignores
+    (friction, armature, actuators), one phrase each.
+    """
+
+    path: Path
+    format: str
+    joints: tuple[RobotJoint, ...]
+    poses: dict
+    floating: frozenset = frozenset()
+    gravity: np.ndarray | None = None
+    notes: tuple[str, ...] = field(default=())
+
+
+def compose(a: Pose, b: Pose) -> Pose:
+    """The pose b (in frame a) in a's parent frame."""
+    return a[0] @ b[0], a[0] @ b[1] + a[1]
+
+
+def inverse(a: Pose) -> Pose:
+    return a[0].T, -(a[0].T @ a[1])
+
+
+def unit_axis(v: Values, node: Node, xyz: np.ndarray) -> np.ndarray:
+    """``xyz`` normalised; refuses a zero axis at ``node``."""
+    norm = float(np.linalg.norm(xyz))
+    if norm == 0.0:
+        raise v.error(node, "the joint axis is zero; give a direction, e.g. 0 0 1")
+    return np.asarray(xyz, float) / norm
+
+
+def poses_from_tree(joints, roots: list[str]) -> dict:
+    """Link poses in the model frame: each root at the identity, each child at its parent's pose
+    composed with the joint origin (``joints``: (parent, child, origin in parent frame))."""
+    children: dict[str, list] = {}
+    for parent, child, origin in joints:
+        children.setdefault(parent, []).append((child, origin))
+    poses = {r: IDENTITY for r in roots}
+    todo = deque(roots)
+    while todo:
+        link = todo.popleft()
+        for child, origin in children.get(link, ()):
+            poses[child] = compose(poses[link], origin)
+            todo.append(child)
+    return poses
+
+
+# --- URDF ---------------------------------------------------------------------------------------
+_URDF_KINDS = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic",
+               "fixed": "fixed", "floating": "free"}
+
+
+def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
+    """URDF ``<joint name type>`` with ``<parent link>``, ``<child link>``, ``<origin xyz rpy>``
+    (the child link frame in the parent link frame), ``<axis xyz>`` (joint frame; default
+    1 0 0, the specification's), ``<limit lower upper>`` and ``<dynamics damping friction>``."""
+    v = Values(path)
+    joints, tree, notes = [], [], set()
+    for node in root.findall("joint"):
+        name = node.attrs.get("name")
+        if not name:
+            raise v.error(node, 'a joint needs a name="..."')
+        written = node.attrs.get("type", "")
+        if written == "planar":
+            raise v.error(node, f"joint {name!r}: type planar (two shifts and a turn) is not "
+                                "supported by the systems engine; model it as two prismatic "
+                                "joints and a revolute joint through massless links")
+        if written not in _URDF_KINDS:
+            raise v.error(node, f"joint {name!r}: type {written!r} is not a URDF joint type; "
+                                f"use one of {', '.join(_URDF_KINDS)}")
+        kind = _URDF_KINDS[written]
+        parent = node.find("parent").attrs["link"]  # parse_urdf checked both ends
+        child = node.find("child").attrs["link"]
+        origin = node.find("origin")
+        pose = IDENTITY if origin is None else (
+            rpy_matrix(*v.attr(origin, "rpy", 3, [0, 0, 0])), v.attr(origin, "xyz", 3, [0, 0, 0]))
+        axes = np.zeros((0, 3))
+        if kind in ("revolute", "prismatic"):
+            axis = node.find("axis")
+            xyz = np.array([1.0, 0.0, 0.0]) if axis is None else v.attr(
+                axis, "xyz", 3, [1, 0, 0])
+            axes = unit_axis(v, axis if axis is not None else node, xyz)[None, :]
+        limits = None
+        limit = node.find("limit")
+        if written in ("revolute", "prismatic") and limit is not None:
+            limits = ((v.number(limit, "lower", 0.0), v.number(limit, "upper", 0.0)),)
+        damping = 0.0
+        dyn = node.find("dynamics")
+        if dyn is not None:
+            damping = v.positive(dyn, "damping", v.number(dyn, "damping", 0.0), allow_zero=True)
+            if v.number(dyn, "friction", 0.0):
+                notes.add("joint friction")
+        joints.append(RobotJoint(name, kind, parent, child, IDENTITY, axes, node, limits,
+                                 damping))
+        tree.append((parent, child, pose))
+    children = {j.child for j in joints}
+    roots = [name for name in links if name not in children]
+    poses = poses_from_tree(tree, roots)
+    floating = frozenset(j.child for j in joints if j.kind == "free")
+    if root.find("transmission") is not None:
+        notes.add("transmissions (actuators)")
+    return Mechanism(path, "urdf", tuple(joints), poses, floating, None, tuple(sorted(notes)))

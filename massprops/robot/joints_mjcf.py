@@ -1,0 +1,185 @@
+"""MJCF joints and body poses (see `joints` for the frames).
+
+Rules (MuJoCo XML reference): a body's ``pos`` and orientation place it in its parent body
+(through ``<frame>`` elements); ``<joint pos axis>`` are in the body's own frame (default pos 0,
+axis 0 0 1), taking attributes from the body's ``childclass`` or the joint's ``class``
+(`mjcf._Defaults`); ``type`` hinge (default), slide, ball, free (``<freejoint>``); ``range`` in
+the compiler's angle unit for a hinge, limited when stated (``autolimits``, MuJoCo's default) or
+``limited="true"``; ``damping``, ``stiffness`` about ``springref``. A body with no joint is welded
+to its parent. Several joints in one body compose in order (each later one turns with the
+earlier ones); two hinges through one point are a universal joint, a hinge and a slide along one
+axis a cylindrical joint (named ``a+b``); other combinations are refused. ``<equality><connect
+body1 body2 anchor>`` (anchor in body1's frame) is a loop: a spherical joint between the two
+bodies at the anchor. ``ref`` must be 0 (the zero pose is the pose as written).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from massprops.robot.joints import IDENTITY, WORLD_LINK, Mechanism, RobotJoint, compose, unit_axis
+from massprops.robot.mjcf import _Compiler, _Defaults, _pose
+from massprops.robot.mjcf_tree import expand_includes
+from massprops.robot.values import Values
+from massprops.robot.xmltree import Node
+
+__all__ = ["mjcf_mechanism"]
+
+_KINDS = {"hinge": "revolute", "slide": "prismatic", "ball": "spherical", "free": "free"}
+_SAME_POINT = 1e-12  # m: two hinges "through one point" up to round-off of the written values
+_PARALLEL = 1e-12    # |a × b| of unit axes taken as parallel (written values: exact or not)
+
+
+class _Reader:
+    def __init__(self, root: Node, path: Path) -> None:
+        self.v = Values(path)
+        expand_includes(root, path)  # idempotent: the parser spliced them already
+        self.compiler = _Compiler(root, self.v, path)
+        self.defaults = _Defaults(root, self.v)
+        attrs: dict[str, str] = {}
+        for node in root.findall("compiler"):
+            attrs.update(node.attrs)
+        self.autolimits = attrs.get("autolimits", "true") == "true"
+        self.poses: dict = {}
+        self.joints: list[RobotJoint] = []
+        self.floating: set = set()
+        self.notes: set = set()
+        self.next_id = 1
+
+    def walk(self, node: Node, childclass: str, frame, body: str, world) -> None:
+        for child in node.children:
+            if child.tag == "body":
+                self.body(child, child.attrs.get("childclass", childclass), frame, body, world)
+            elif child.tag == "frame":
+                attrs = (self.defaults.attrs(child, childclass) if "class" in child.attrs
+                         else child.attrs)
+                inner = compose(frame, _pose(attrs, child, self.compiler, self.v))
+                self.walk(child, child.attrs.get("childclass", childclass), inner, body, world)
+            elif child.tag in ("replicate", "attach"):
+                raise self.v.error(child, f"<{child.tag}> is not read as a mechanism yet; "
+                                          "expand it (mujoco.MjSpec, mj_saveLastXML) first")
+
+    def body(self, node: Node, childclass: str, frame, parent: str, parent_world) -> None:
+        body_id, self.next_id = self.next_id, self.next_id + 1
+        name = node.attrs.get("name") or f"body#{body_id}"
+        world = compose(parent_world, compose(frame, _pose(node.attrs, node, self.compiler,
+                                                           self.v)))
+        self.poses[name] = world
+        own = [c for c in node.children if c.tag in ("joint", "freejoint")]
+        self.joints.append(self.joint(own, name, parent, childclass) if own else RobotJoint(
+            f"{name}.weld", "fixed", parent, name, IDENTITY, np.zeros((0, 3)), node))
+        self.walk(node, childclass, IDENTITY, name, world)
+
+    def one(self, node: Node, childclass: str) -> tuple[str, dict]:
+        a = self.defaults.attrs(node, childclass)
+        kind = "free" if node.tag == "freejoint" else a.get("type", "hinge")
+        if kind not in _KINDS:
+            raise self.v.error(node, f"joint type {kind!r}: expected hinge, slide, ball or free")
+        return kind, a
+
+    def joint(self, nodes: list[Node], body: str, parent: str, childclass: str) -> RobotJoint:
+        v = self.v
+        read = [self.one(n, childclass) for n in nodes]
+        names = [a.get("name") or f"{body}.joint{k}" for k, (_, a) in enumerate(read)]
+        pos = [v.numbers(n, a["pos"], "pos=", 3, 'pos="0 0 0"') if "pos" in a else np.zeros(3)
+               for n, (_, a) in zip(nodes, read)]
+        axes = [unit_axis(v, n, v.numbers(n, a["axis"], "axis=", 3, 'axis="0 0 1"'))
+                if "axis" in a else np.array([0.0, 0.0, 1.0]) for n, (_, a) in zip(nodes, read)]
+        kinds = [k for k, _ in read]
+        for n, (k, a) in zip(nodes, read):
+            if k in ("hinge", "slide") and float(a.get("ref", "0")) != 0.0:
+                raise v.error(n, f"joint {a.get('name', '?')!r}: ref={a['ref']!r}: massprops "
+                                 "starts from the pose as written (ref 0); move the body instead")
+            if float(a.get("armature", "0")):
+                self.notes.add("joint armature")
+            if float(a.get("frictionloss", "0")):
+                self.notes.add("joint friction")
+        limits = [self.limits(n, k, a) for n, (k, a) in zip(nodes, read)]
+        damping = [float(a.get("damping", "0")) for _, a in read]
+        stiff = [float(a.get("stiffness", "0")) for _, a in read]
+        rest = [float(a.get("springref", "0")) for _, a in read]
+        if kinds[0] == "hinge":
+            rest[0] = self.compiler.radians(rest[0])
+        if len(nodes) == 1:
+            kind = _KINDS[kinds[0]]
+            if kind == "free":
+                self.floating.add(body)
+            ax = axes[0][None, :] if kind in ("revolute", "prismatic") else np.zeros((0, 3))
+            return RobotJoint(names[0], kind, parent, body, (np.eye(3), pos[0]), ax, nodes[0],
+                              (limits[0],) if limits[0] else None, damping[0], stiff[0],
+                              rest[0])
+        joined = "+".join(names)
+        if len(nodes) == 2 and kinds == ["hinge", "hinge"] and \
+                np.linalg.norm(pos[0] - pos[1]) <= _SAME_POINT and \
+                np.linalg.norm(np.cross(axes[0], axes[1])) > _PARALLEL:
+            kind, ax = "universal", np.array(axes)
+        elif len(nodes) == 2 and sorted(kinds) == ["hinge", "slide"] and \
+                np.linalg.norm(np.cross(axes[0], axes[1])) <= _PARALLEL and axes[0] @ axes[1] > 0:
+            turn = kinds.index("hinge")
+            kind, ax = "cylindrical", axes[turn][None, :]
+            order = [turn, 1 - turn]
+            pos = [pos[turn]]
+            limits = [limits[k] for k in order]
+        else:
+            raise v.error(nodes[0], f"body {body!r} has joints {', '.join(names)} "
+                                    f"({', '.join(kinds)}): the systems engine takes one joint, "
+                                    "two hinges through one point (universal) or a hinge and a "
+                                    "slide along one axis (cylindrical); split the body with "
+                                    "massless bodies between the joints")
+        if any(damping) or any(stiff):
+            raise v.error(nodes[0], f"body {body!r}: damping or stiffness on a combined joint "
+                                    f"({joined}) is not supported; remove it or split the body")
+        return RobotJoint(joined, kind, parent, body, (np.eye(3), pos[0]), ax, nodes[0],
+                          tuple(limits) if any(limits) else None)
+
+    def limits(self, node: Node, kind: str, a: dict):
+        limited = a.get("limited", "auto")
+        if "range" not in a or limited == "false" or (limited == "auto" and not self.autolimits):
+            return None
+        lo, hi = self.v.numbers(node, a["range"], "range=", 2, 'range="-90 90"')
+        if kind == "hinge":
+            lo, hi = self.compiler.radians(lo), self.compiler.radians(hi)
+        return (float(lo), float(hi))
+
+
+def mjcf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
+    """Joints (with the ``connect`` loops) and body poses of the MJCF model ``root``."""
+    r = _Reader(root, path)
+    for top in root.findall("worldbody"):
+        r.walk(top, "main", IDENTITY, WORLD_LINK, IDENTITY)
+    for eq in root.findall("equality"):
+        for k, node in enumerate(eq.children):
+            r.joints.append(_loop(r, node, k))
+    joints = [j for j in r.joints if j is not None]
+    gravity = None
+    for option in root.findall("option"):
+        if "gravity" in option.attrs:
+            gravity = r.v.numbers(option, option.attrs["gravity"], "gravity=", 3,
+                                  'gravity="0 0 -9.81"')
+    if root.find("actuator") is not None:
+        r.notes.add("actuators")
+    return Mechanism(path, "mjcf", tuple(joints), r.poses, frozenset(r.floating), gravity,
+                     tuple(sorted(r.notes)))
+
+
+def _loop(r: _Reader, node: Node, k: int) -> RobotJoint | None:
+    v = r.v
+    a = r.defaults.attrs(node, "main")
+    if a.get("active", "true") == "false":
+        return None
+    if node.tag != "connect":
+        raise v.error(node, f"<{node.tag}> equality is not supported as a joint (only "
+                            "<connect body1 body2 anchor>, a spherical loop joint)")
+    if "body1" not in a:
+        raise v.error(node, "massprops reads <connect body1= body2= anchor=> (not site1/site2); "
+                            "give the bodies and the anchor in body1's frame")
+    body1, body2 = a["body1"], a.get("body2", WORLD_LINK)
+    for b in (body1, body2):
+        if b != WORLD_LINK and b not in r.poses:
+            raise v.error(node, f"no body named {b!r}; check the spelling")
+    anchor = v.numbers(node, a.get("anchor", "0 0 0"), "anchor=", 3, 'anchor="0 0 0"')
+    name = a.get("name") or f"connect{k}"
+    return RobotJoint(name, "spherical", body2, body1, (np.eye(3), anchor), np.zeros((0, 3)),
+                      node, loop=True)

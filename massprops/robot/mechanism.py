@@ -1,0 +1,35 @@
+"""`read_mechanism`: the joints and link poses of a parsed description, by its format.
+
+The values and the frames are in `joints` (URDF reader there); SDF in `joints_sdf`, MJCF in
+`joints_mjcf`. The parsed `RobotModel` keeps the XML tree the joints are read from (every
+link's node; MJCF includes already spliced in).
+"""
+
+from __future__ import annotations
+
+from massprops.robot.joints import Mechanism, urdf_mechanism
+from massprops.robot.model import RobotModel
+from massprops.robot.values import Values
+from massprops.robot.xmltree import Node
+
+__all__ = ["read_mechanism"]
+
+
+def read_mechanism(model: RobotModel) -> Mechanism:
+    """The joints and link poses of a parsed description (`analyze.load_model`); raises
+    RobotModelError (one line) for a joint the systems engine cannot express."""
+    if not model.links:
+        raise Values(model.path).error(Node("robot", {}, 1, 0, 0), "no links: nothing moves")
+    root = model.links[0].node
+    while root.parent is not None:
+        root = root.parent
+    names = [link.name for link in model.links]
+    if model.format == "urdf":
+        return urdf_mechanism(root, model.path, names)
+    if model.format == "sdf":
+        from massprops.robot.joints_sdf import sdf_mechanism  # a description loads its own reader
+
+        return sdf_mechanism(root, model.path, names)
+    from massprops.robot.joints_mjcf import mjcf_mechanism  # a description loads its own reader
+
+    return mjcf_mechanism(root, model.path, names)
