@@ -135,13 +135,20 @@ def test_singular_mass_matrix_is_refused(tmp_path, run):
     assert "singular" in result.stderr and "j1, j2" in result.stderr
 
 
-def test_one_body_scene_refuses_duration(tmp_path, run):
+def test_one_body_scene_takes_duration(tmp_path, run):
+    """--duration overrides a one-body scene's time.duration too (0 only means something for a
+    system: its start pose's reactions)."""
+    import json
+
     scene = tmp_path / "s.yaml"
     scene.write_text("body: {mass: 1, inertia: [[1, 0, 0], [0, 2, 0], [0, 0, 3]]}\n"
-                     "time: {duration: 1}\n")
-    result = run("simulate", scene, "--duration", "0.5")
-    assert result.exit_code == 2
-    assert "--duration" in result.stderr
+                     "initial: {velocity: [1, 0, 0]}\ntime: {duration: 1}\n")
+    result = run("simulate", scene, "--duration", "0.5", "--json")
+    assert result.exit_code == 0
+    final = json.loads(result.stdout)["final"]
+    assert final["t"] == 0.5 and abs(final["position"][0] - 0.5) < 1e-12  # free drift 1 m/s
+    result = run("simulate", scene, "--duration", "0")
+    assert result.exit_code == 2 and "--duration" in result.stderr
 
 
 def test_sdf_ball_universal_nested_and_static(tmp_path):

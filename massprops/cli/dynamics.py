@@ -85,8 +85,8 @@ class _Progress:
               help="Steps a run may take (default 2e7); beyond it the run is refused or "
                    "stopped, keeping what it computed.")
 @click.option("--duration", type=click.FloatRange(min=0), default=None,
-              help="Seconds to run a robot description or a system scene (overrides "
-                   "time.duration; 0: the start pose's reactions and holding torques).")
+              help="Seconds to run (overrides time.duration; 0, for a system or a robot "
+                   "description: the start pose's reactions and holding torques).")
 @click.pass_context
 def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: str | None,
              integrator: str | None, rtol: float | None, step: float | None,
@@ -112,12 +112,9 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             _simulate_system(scene_path, as_json, output_path, integrator, rtol, every, force,
                              plot_path, duration)
             return
-        if duration is not None:
-            from massprops.errors import UsageError, setting_ref  # deferred: rare path
-
-            raise UsageError(f"{scene_path}: {setting_ref('duration')} applies to systems and "
-                             "robot descriptions; set time.duration in a one-body scene")
         scene = load_scene(scene_path)
+        if duration is not None:
+            scene = _one_body_duration(scene, scene_path, duration)
         for w in scene.warnings:
             say_warning(scene.body_source, w)
         for note in scene.notes:  # already placed: "scene.yaml:LINE: ..."
@@ -231,6 +228,19 @@ def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
         from massprops.dynamics.plots import plot_simulation
 
         plot_simulation(result, plot_path, force=force, protect=protect)
+
+
+def _one_body_duration(scene: Any, scene_path: str, duration: float) -> Any:
+    """``scene`` run for ``duration`` s instead of its time.duration."""
+    import dataclasses  # deferred: only with --duration
+
+    if duration <= 0:
+        # deferred: rare path
+        from massprops.errors import UsageError, setting_ref
+
+        raise UsageError(f"{scene_path}: {setting_ref('duration')} 0 gives a system's start "
+                         "pose reactions; a one-body scene needs a duration > 0")
+    return dataclasses.replace(scene, time=dataclasses.replace(scene.time, duration=duration))
 
 
 def _is_system(scene_path: str) -> bool:
