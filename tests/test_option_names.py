@@ -28,8 +28,8 @@ UNREACHABLE = {
     ("massprops.io.atomic", "force"): "only when writing a file; inspect writes none",
     ("massprops.cli.common", "density"): "check_mass_options, called by inspect and align only",
     ("massprops.cli.common", "mass"): "check_mass_options, called by inspect and align only",
-    ("massprops.robot.elements", "principal"): "inspect --format mjcf --principal only",
-    ("massprops.robot.elements", "format"): "inspect --format mjcf --principal only",
+    ("massprops.robot.write.elements", "principal"): "inspect --format mjcf --principal only",
+    ("massprops.robot.write.elements", "format"): "inspect --format mjcf --principal only",
     ("massprops.dynamics.compiled.build", "only"): "the build script's own usage line",
 }
 """Other commands' options that a shared module names in a branch this command never takes."""

@@ -10,7 +10,14 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from massprops.robot.primitives import PRIMITIVES, box, capsule, cylinder, ellipsoid, sphere
+from massprops.robot.inertials.primitives import (
+    PRIMITIVES,
+    box,
+    capsule,
+    cylinder,
+    ellipsoid,
+    sphere,
+)
 
 
 def test_box_exact_in_fractions():

@@ -10,7 +10,7 @@ import pytest
 
 from massprops.errors import RobotModelError, settings_in
 from massprops.robot.analyze import analyze_model
-from massprops.robot.uris import resolve_uri
+from massprops.robot.formats.uris import resolve_uri
 
 WEDGE = Path(__file__).resolve().parent / "robots" / "split" / "meshes" / "wedge.obj"
 

@@ -70,7 +70,7 @@ def _show(result: Any, out_format: str, principal: bool) -> None:
             emit_json(record)
     elif out_format in ELEMENT_FORMATS:
         from massprops.cad.inspect import local_inertial  # CAD branch only
-        from massprops.robot.elements import WRITERS
+        from massprops.robot.write.elements import WRITERS
 
         for solid in result.solids:
             com, inertia = local_inertial(solid)

@@ -262,7 +262,7 @@ def _show_record(ctx: click.Context, record: Any, out_format: str, principal: bo
             to_stdout(lambda: _echo_text(csv_row(record)))
         elif out_format in ELEMENT_FORMATS:
             # deferred: only --format urdf|sdf|mjcf writes elements
-            from massprops.robot.elements import WRITERS
+            from massprops.robot.write.elements import WRITERS
 
             d = record.data
             to_stdout(lambda: click.echo(f"<!-- {record.file} -->"))

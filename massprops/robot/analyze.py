@@ -22,11 +22,11 @@ from massprops.errors import (
     error_message,
     setting_ref,
 )
-from massprops.robot.combine import LinkMass, MeshCache, combine, integrate_geometry
-from massprops.robot.compare import Comparison, compare, validity_problems
+from massprops.robot.formats.xacro_run import EXPANDED, expand_xacro, has_xacro, is_xacro
+from massprops.robot.formats.xmltree import parse_xml, parse_xml_bytes
+from massprops.robot.inertials.combine import LinkMass, MeshCache, combine, integrate_geometry
+from massprops.robot.inertials.compare import Comparison, compare, validity_problems
 from massprops.robot.model import Link, RobotModel
-from massprops.robot.xacro_run import EXPANDED, expand_xacro, has_xacro, is_xacro
-from massprops.robot.xmltree import parse_xml, parse_xml_bytes
 
 __all__ = ["LinkReport", "ModelReport", "analyze_model", "load_model", "FORMATS_BY_ROOT"]
 
@@ -126,7 +126,7 @@ class ModelReport:
         """Write the description with every computed link's inertial replaced or added;
         returns how many were written. Atomic, never over the input."""
         # deferred: a description loads only its own format's parser
-        from massprops.robot.writeback import edited_bytes, write_description
+        from massprops.robot.write.writeback import edited_bytes, write_description
 
         edits = [(r.link.node, r.link.inertial_node, r.computed) for r in self.links
                  if r.computed is not None]
@@ -171,13 +171,13 @@ def load_model(path: str | os.PathLike, *, source: str = "auto",
                               "a root element <robot> (URDF), <sdf> (SDF) or <mujoco> (MJCF)")
     if fmt == "urdf":
         # deferred: a description loads only its own format's parser
-        from massprops.robot.urdf import parse_urdf as parse
+        from massprops.robot.formats.urdf import parse_urdf as parse
     elif fmt == "sdf":
         # deferred: a description loads only its own format's parser
-        from massprops.robot.sdf import parse_sdf as parse
+        from massprops.robot.formats.sdf import parse_sdf as parse
     else:
         # deferred: a description loads only its own format's parser
-        from massprops.robot.mjcf import parse_mjcf as parse
+        from massprops.robot.formats.mjcf import parse_mjcf as parse
     model = parse(root, data, p, source=source, package_paths=[Path(d) for d in package_paths])
     return model if note is None else replace(model, warnings=(note, *model.warnings))
 
@@ -207,7 +207,7 @@ def analyze_model(path: str | os.PathLike, *, source: str = "auto",
     meshes = MeshCache(allow_open=allow_open, repairs=repairs)
     reports = [_link(link, model, meshes, density, source) for link in model.links]
     if model.rules.any:
-        from massprops.robot.rules import apply_rules  # only MJCF compilers ask for it
+        from massprops.robot.inertials.rules import apply_rules  # only MJCF compilers ask for it
 
         reports, note = apply_rules(reports, model.rules)
         if note:

@@ -1,16 +1,17 @@
 """`read_mechanism`: the joints and link poses of a parsed description, by its format.
 
-The values and the frames are in `joints` (URDF reader there); SDF in `joints_sdf`, MJCF in
-`joints_mjcf`. The parsed `RobotModel` keeps the XML tree the joints are read from (every
-link's node; MJCF includes already spliced in).
+The values and the frames are in `joints.frames`; one reader per format in `joints.urdf`,
+`joints.sdf`, `joints.mjcf`. The parsed `RobotModel` keeps the XML tree the joints are read
+from (every link's node; MJCF includes already spliced in).
 """
 
 from __future__ import annotations
 
-from massprops.robot.joints import Mechanism, urdf_mechanism
+from massprops.robot.formats.values import Values
+from massprops.robot.formats.xmltree import Node
+from massprops.robot.joints.frames import Mechanism
+from massprops.robot.joints.urdf import urdf_mechanism
 from massprops.robot.model import RobotModel
-from massprops.robot.values import Values
-from massprops.robot.xmltree import Node
 
 __all__ = ["read_mechanism"]
 
@@ -27,9 +28,9 @@ def read_mechanism(model: RobotModel) -> Mechanism:
     if model.format == "urdf":
         return urdf_mechanism(root, model.path, names)
     if model.format == "sdf":
-        from massprops.robot.joints_sdf import sdf_mechanism  # a description loads its own reader
+        from massprops.robot.joints.sdf import sdf_mechanism  # a description loads its own reader
 
         return sdf_mechanism(root, model.path, names)
-    from massprops.robot.joints_mjcf import mjcf_mechanism  # a description loads its own reader
+    from massprops.robot.joints.mjcf import mjcf_mechanism  # a description loads its own reader
 
     return mjcf_mechanism(root, model.path, names)

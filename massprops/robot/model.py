@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.robot.xmltree import Node
+from massprops.robot.formats.xmltree import Node
 
 __all__ = ["Geometry", "Link", "MassRules", "RobotModel", "StatedInertial", "pick_source"]
 

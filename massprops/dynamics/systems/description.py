@@ -27,7 +27,7 @@ from massprops.dynamics.systems.assemble import build_tree, initial_coordinates
 from massprops.dynamics.systems.model import WORLD, SystemBody, SystemJoint
 from massprops.dynamics.systems.tree import kinematics, mass_matrix
 from massprops.errors import RobotModelError
-from massprops.robot.joints import WORLD_LINK, Mechanism, RobotJoint, compose
+from massprops.robot.joints.frames import WORLD_LINK, Mechanism, RobotJoint, compose
 from massprops.robot.mechanism import read_mechanism
 
 __all__ = ["Description", "describe"]

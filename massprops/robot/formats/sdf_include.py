@@ -15,8 +15,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from massprops.errors import RobotModelError, setting_ref
-from massprops.robot.uris import resolve_uri
-from massprops.robot.xmltree import Node, parse_xml
+from massprops.robot.formats.uris import resolve_uri
+from massprops.robot.formats.xmltree import Node, parse_xml
 
 __all__ = ["expand_sdf_includes"]
 

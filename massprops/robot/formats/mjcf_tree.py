@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from massprops.errors import RobotModelError
-from massprops.robot.xmltree import Node, parse_xml
+from massprops.robot.formats.xmltree import Node, parse_xml
 
 __all__ = ["expand_includes", "replicate_frames", "replicate_suffix"]
 

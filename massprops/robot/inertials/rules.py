@@ -18,7 +18,7 @@ from dataclasses import replace
 import numpy as np
 
 from massprops.inertia import principal_axes
-from massprops.robot.combine import LinkMass
+from massprops.robot.inertials.combine import LinkMass
 from massprops.robot.model import MassRules, StatedInertial
 
 __all__ = ["apply_rules"]
@@ -63,7 +63,8 @@ def _with(report, stated, computed, factor: float, rules: MassRules):
     link = replace(report.link, stated=stated)
     comparison = report.comparison
     if comparison is not None and stated is not None and computed is not None:
-        from massprops.robot.compare import compare  # a cycle otherwise: compare needs combine
+        # a cycle otherwise: compare needs combine
+        from massprops.robot.inertials.compare import compare
 
         comparison = compare(stated, computed)
     warnings = report.warnings + ("the compiler's boundmass/boundinertia/settotalmass changed "

@@ -19,8 +19,8 @@ from massprops.inertia import parallel_axis, principal_axes, rotate_inertia
 from massprops.inspection.file import inspect_mesh
 from massprops.io import read_mesh
 from massprops.mesh import Mesh
+from massprops.robot.inertials.primitives import PRIMITIVES
 from massprops.robot.model import Geometry
-from massprops.robot.primitives import PRIMITIVES
 
 __all__ = ["LinkMass", "Part", "combine", "integrate_geometry"]
 

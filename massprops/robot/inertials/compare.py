@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.inertia import principal_axes
-from massprops.robot.combine import LinkMass
+from massprops.robot.inertials.combine import LinkMass
 from massprops.robot.model import StatedInertial
 from massprops.tolerances import DEGENERATE_MOMENT_RTOL, INERTIA_VALIDITY_RTOL
 

@@ -60,7 +60,7 @@ def expand_xacro(path: Path, args: Mapping[str, str] | None = None,
 @contextlib.contextmanager
 def _find_packages(module, path: Path, package_paths: Sequence[Path]):
     """``$(find PKG)`` through massprops' package search while xacro runs (restored after)."""
-    from massprops.robot.uris import resolve_uri  # the only user of the search here
+    from massprops.robot.formats.uris import resolve_uri  # the only user of the search here
 
     def find(package: str) -> str:
         folder, problem = resolve_uri(f"package://{package}/", path.parent, path, package_paths)

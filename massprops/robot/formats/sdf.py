@@ -22,12 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
+from massprops.robot.formats.poses import quat_matrix, rpy_matrix
+from massprops.robot.formats.sdf_include import expand_sdf_includes
+from massprops.robot.formats.uris import resolve_uri
+from massprops.robot.formats.values import Values
+from massprops.robot.formats.xmltree import Node
 from massprops.robot.model import Geometry, Link, RobotModel, StatedInertial, pick_source
-from massprops.robot.poses import quat_matrix, rpy_matrix
-from massprops.robot.sdf_include import expand_sdf_includes
-from massprops.robot.uris import resolve_uri
-from massprops.robot.values import Values
-from massprops.robot.xmltree import Node
 
 __all__ = ["parse_sdf"]
 

@@ -14,8 +14,8 @@ from pathlib import Path
 
 from massprops.errors import RobotModelError
 from massprops.io.atomic import atomic_write_bytes
-from massprops.robot.elements import WRITERS
-from massprops.robot.xmltree import Node
+from massprops.robot.formats.xmltree import Node
+from massprops.robot.write.elements import WRITERS
 
 __all__ = ["edited_bytes", "write_description"]
 

@@ -31,19 +31,19 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.robot.mjcf_tree import expand_includes, replicate_frames, replicate_suffix
-from massprops.robot.model import Geometry, Link, MassRules, RobotModel, StatedInertial
-from massprops.robot.msh import read_msh
-from massprops.robot.poses import (
+from massprops.robot.formats.mjcf_tree import expand_includes, replicate_frames, replicate_suffix
+from massprops.robot.formats.msh import read_msh
+from massprops.robot.formats.poses import (
     axisangle_matrix,
     euler_matrix,
     quat_matrix,
     xyaxes_matrix,
     zaxis_matrix,
 )
-from massprops.robot.uris import resolve_uri
-from massprops.robot.values import Values
-from massprops.robot.xmltree import Node, parse_xml
+from massprops.robot.formats.uris import resolve_uri
+from massprops.robot.formats.values import Values
+from massprops.robot.formats.xmltree import Node, parse_xml
+from massprops.robot.model import Geometry, Link, MassRules, RobotModel, StatedInertial
 
 __all__ = ["parse_mjcf"]
 

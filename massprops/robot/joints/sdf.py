@@ -1,4 +1,4 @@
-"""SDFormat joints and link poses (see `joints` for the frames).
+"""SDFormat joints and link poses (see `joints.frames` for the frames).
 
 Rules (sdformat.org, joint and pose semantics): a link's ``<pose>`` is in the model frame (1.7+:
 ``relative_to`` another frame); a joint's ``<pose>`` is in its *child link* frame (1.4-1.6: always;
@@ -19,7 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.robot.joints import (
+from massprops.robot.formats.sdf import _FrameGraph, _scope, pose_of
+from massprops.robot.formats.values import Values
+from massprops.robot.formats.xmltree import Node
+from massprops.robot.joints.frames import (
     IDENTITY,
     WORLD_LINK,
     Mechanism,
@@ -28,9 +31,6 @@ from massprops.robot.joints import (
     inverse,
     unit_axis,
 )
-from massprops.robot.sdf import _FrameGraph, _scope, pose_of
-from massprops.robot.values import Values
-from massprops.robot.xmltree import Node
 
 __all__ = ["sdf_mechanism"]
 

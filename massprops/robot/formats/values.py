@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from massprops.errors import RobotModelError
-from massprops.robot.xmltree import Node
+from massprops.robot.formats.xmltree import Node
 
 __all__ = ["Values"]
 

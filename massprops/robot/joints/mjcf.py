@@ -1,4 +1,4 @@
-"""MJCF joints and body poses (see `joints` for the frames).
+"""MJCF joints and body poses (see `joints.frames` for the frames).
 
 Rules (MuJoCo XML reference): a body's ``pos`` and orientation place it in its parent body
 (through ``<frame>`` elements); ``<joint pos axis>`` are in the body's own frame (default pos 0,
@@ -19,11 +19,18 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.robot.joints import IDENTITY, WORLD_LINK, Mechanism, RobotJoint, compose, unit_axis
-from massprops.robot.mjcf import _Compiler, _Defaults, _pose
-from massprops.robot.mjcf_tree import expand_includes
-from massprops.robot.values import Values
-from massprops.robot.xmltree import Node
+from massprops.robot.formats.mjcf import _Compiler, _Defaults, _pose
+from massprops.robot.formats.mjcf_tree import expand_includes
+from massprops.robot.formats.values import Values
+from massprops.robot.formats.xmltree import Node
+from massprops.robot.joints.frames import (
+    IDENTITY,
+    WORLD_LINK,
+    Mechanism,
+    RobotJoint,
+    compose,
+    unit_axis,
+)
 
 __all__ = ["mjcf_mechanism"]
 

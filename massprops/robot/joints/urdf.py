@@ -1,0 +1,74 @@
+"""URDF joints and link poses (see `joints.frames` for the frames)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from massprops.robot.formats.poses import rpy_matrix
+from massprops.robot.formats.values import Values
+from massprops.robot.formats.xmltree import Node
+from massprops.robot.joints.frames import (
+    IDENTITY,
+    Mechanism,
+    RobotJoint,
+    poses_from_tree,
+    unit_axis,
+)
+
+__all__ = ["urdf_mechanism"]
+
+_URDF_KINDS = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic",
+               "fixed": "fixed", "floating": "free"}
+
+
+def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
+    """URDF ``<joint name type>`` with ``<parent link>``, ``<child link>``, ``<origin xyz rpy>``
+    (the child link frame in the parent link frame), ``<axis xyz>`` (joint frame; default
+    1 0 0, the specification's), ``<limit lower upper>`` and ``<dynamics damping friction>``."""
+    v = Values(path)
+    joints, tree, notes = [], [], set()
+    for node in root.findall("joint"):
+        name = node.attrs.get("name")
+        if not name:
+            raise v.error(node, 'a joint needs a name="..."')
+        written = node.attrs.get("type", "")
+        if written == "planar":
+            raise v.error(node, f"joint {name!r}: type planar (two shifts and a turn) is not "
+                                "supported by the systems engine")
+        if written not in _URDF_KINDS:
+            raise v.error(node, f"joint {name!r}: type {written!r} is not a URDF joint type; "
+                                f"use one of {', '.join(_URDF_KINDS)}")
+        kind = _URDF_KINDS[written]
+        parent = node.find("parent").attrs["link"]  # parse_urdf checked both ends
+        child = node.find("child").attrs["link"]
+        origin = node.find("origin")
+        pose = IDENTITY if origin is None else (
+            rpy_matrix(*v.attr(origin, "rpy", 3, [0, 0, 0])), v.attr(origin, "xyz", 3, [0, 0, 0]))
+        axes = np.zeros((0, 3))
+        if kind in ("revolute", "prismatic"):
+            axis = node.find("axis")
+            xyz = np.array([1.0, 0.0, 0.0]) if axis is None else v.attr(
+                axis, "xyz", 3, [1, 0, 0])
+            axes = unit_axis(v, axis if axis is not None else node, xyz)[None, :]
+        limits = None
+        limit = node.find("limit")
+        if written in ("revolute", "prismatic") and limit is not None:
+            limits = ((v.number(limit, "lower", 0.0), v.number(limit, "upper", 0.0)),)
+        damping = 0.0
+        dyn = node.find("dynamics")
+        if dyn is not None:
+            damping = v.positive(dyn, "damping", v.number(dyn, "damping", 0.0), allow_zero=True)
+            if v.number(dyn, "friction", 0.0):
+                notes.add("joint friction")
+        joints.append(RobotJoint(name, kind, parent, child, IDENTITY, axes, node, limits,
+                                 damping))
+        tree.append((parent, child, pose))
+    children = {j.child for j in joints}
+    roots = [name for name in links if name not in children]
+    poses = poses_from_tree(tree, roots)
+    floating = frozenset(j.child for j in joints if j.kind == "free")
+    if root.find("transmission") is not None:
+        notes.add("transmissions (actuators)")
+    return Mechanism(path, "urdf", tuple(joints), poses, floating, None, tuple(sorted(notes)))

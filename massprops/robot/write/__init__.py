@@ -1,0 +1,1 @@
+"""Each format's ``<inertial>`` element, and write-back into the description's bytes."""
