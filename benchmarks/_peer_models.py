@@ -158,8 +158,13 @@ class PinocchioLoop:
 
         self.pin, self.model, self.frame, self.target = pin, model, frame, target
         self.data = model.createData()
-        self.q = np.zeros(model.nq)
+        self.reset()
         self.newton_iterations = 0
+
+    def reset(self) -> None:
+        """Start from the assembly pose (q = 0) again."""
+        self.q = np.zeros(self.model.nq)
+        self.tangent: np.ndarray | None = None  # ∂q_others/∂q0 at self.q
 
     def _jacobian(self, q):
         pin, model, data = self.pin, self.model, self.data
@@ -170,19 +175,27 @@ class PinocchioLoop:
         return data.oMf[self.frame].translation - self.target, jac[self.ROWS]
 
     def close(self, q0: float) -> np.ndarray:
-        """q with q[0] = q0 and the others solving the loop (from the last solution)."""
-        q = self.q.copy()
-        q[0] = q0
-        for _ in range(30):
-            phi, jac = self._jacobian(q)
-            phi = phi[self.ROWS]
-            step = _solve2(jac[:, 1:], phi)
-            q[1:] -= step
-            self.newton_iterations += 1
-            if np.abs(step).max() < 1e-10:  # Newton: the next correction is ~1e-20
-                break
-        self.q = q
-        return q
+        """q with q[0] = q0 and the others solving the loop: Newton from the last solution
+        moved along the loop's tangent (without the predictor a long trial step of a loose
+        rtol lands Newton on the mirrored assembly)."""
+        # long moves (trial stages of a loose rtol) marched in pieces of <= 0.1 rad, so Newton
+        # follows the branch instead of landing on the mirrored assembly
+        pieces = max(1, math.ceil(abs(q0 - self.q[0]) / 0.1))
+        for target in np.linspace(self.q[0], q0, pieces + 1)[1:]:
+            q = self.q.copy()
+            if self.tangent is not None:
+                q[1:] += self.tangent * (target - q[0])
+            q[0] = target
+            for _ in range(30):
+                phi, jac = self._jacobian(q)
+                step = _solve2(jac[:, 1:], phi[self.ROWS])
+                q[1:] -= step
+                self.newton_iterations += 1
+                if np.abs(step).max() < 1e-10:  # Newton: the next correction is ~1e-20
+                    break
+            self.q = q
+            self.tangent = -_solve2(jac[:, 1:], jac[:, 0])
+        return self.q
 
     def rhs(self):
         pin, model, data = self.pin, self.model, self.data
