@@ -310,7 +310,7 @@ def main() -> None:
         try:
             __import__(module)
         except ImportError:
-            print(f"{tool}: not installed, skipped ({INSTALL[tool]})")
+            print(f"{tool}: not installed, skipped ({INSTALL.get(tool, 'pip install ' + tool)})")
             continue
         for problem in results:
             print(f"{tool} on {problem}:", flush=True)
