@@ -62,17 +62,17 @@ def mjcf(sample: dict, integrator: str, timestep: float, solref_scale: float = 2
     for j in tree:
         children.setdefault(j[1], []).append(j)
 
-    def body_xml(j, depth):
+    def body_xml(j):
         name, _, child, point = j
         _, mass, com, inertia = bodies[child]
         full = [inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2],
                 inertia[1, 2]]
-        inner = "".join(body_xml(c, depth + 1) for c in children.get(child, []))
+        inner = "".join(body_xml(c) for c in children.get(child, []))
         return (f'<body name="{child}" pos="0 0 0"><joint name="{name}" type="hinge" '
                 f'axis="0 1 0" pos="{_f(point)}"/><inertial pos="{_f(com)}" mass="{mass!r}" '
                 f'fullinertia="{_f(full)}"/>{inner}</body>')
 
-    world = "".join(body_xml(j, 0) for j in children.get("world", []))
+    world = "".join(body_xml(j) for j in children.get("world", []))
     equality = ""
     if cut is not None:
         name, first, second, point = cut
