@@ -16,6 +16,8 @@ if TYPE_CHECKING:  # the real imports are deferred into each function: start-up 
     from massprops.dynamics.model import Scene
     from massprops.dynamics.precision import PrecisionReport
     from massprops.dynamics.simulate import SimulationResult
+    from massprops.dynamics.systems.model import SystemScene
+    from massprops.dynamics.systems.run import SystemResult
     from massprops.inspection.align import Alignment
     from massprops.inspection.file import Inspection
     from massprops.repair import RepairOptions
@@ -80,28 +82,51 @@ def inspect_many(paths: Iterable, *, jobs: int | None = None, executor: Any = No
     return run(paths, executor, jobs=jobs, **options)
 
 
-def load_scene(path: PathLike) -> Scene:
-    """Read and validate a scene file (YAML; the keys of docs/interface.md)."""
-    from massprops.dynamics.scene import load_scene as load  # deferred: start-up
+def load_scene(path: PathLike) -> Scene | SystemScene:
+    """Read and validate a scene file (YAML; the keys of docs/interface.md): a `Scene`, or for
+    a scene with ``bodies:`` (a system, docs/systems.md) a `SystemScene`."""
+    # deferred: start-up
+    from massprops.dynamics.scene import load_scene as load
+    from massprops.dynamics.systems.scene import is_system_text, load_system
 
-    return load(path)
+    try:
+        with open(path, encoding="utf-8-sig") as handle:
+            system = is_system_text(handle.read())
+    except (OSError, UnicodeDecodeError):  # the reader below says what is wrong, in one line
+        system = False
+    return load_system(path) if system else load(path)
 
 
-def simulate(scene: Scene | PathLike, **options: Any) -> SimulationResult:
+def simulate(scene: Scene | SystemScene | PathLike,
+             **options: Any) -> SimulationResult | SystemResult:
     """Integrate the Newton-Euler equations of a scene (a `Scene` or its file): a
     `SimulationResult` (``final``, ``diagnostics``, ``trajectory``; ``as_dict()`` is the
-    ``simulate --json`` object). ``options``: integrator, rtol, step, every, max_steps."""
-    from massprops.dynamics.simulate import simulate as run  # deferred: start-up
+    ``simulate --json`` object). ``options``: integrator, rtol, step, every, max_steps. A
+    system (a `SystemScene`) gives a `SystemResult` (the same keys, per body and joint);
+    its ``options``: integrator, rtol, every."""
+    # deferred: start-up
+    from massprops.dynamics.simulate import simulate as run
+    from massprops.dynamics.systems.model import SystemScene
+    from massprops.dynamics.systems.run import simulate_system
 
-    return run(scene if _is_scene(scene) else load_scene(scene), **options)
+    scene = scene if _is_scene(scene) else load_scene(scene)
+    if isinstance(scene, SystemScene):
+        return simulate_system(scene, **options)
+    return run(scene, **options)
 
 
-def precision(scene: Scene | PathLike, **options: Any) -> PrecisionReport:
+def precision(scene: Scene | SystemScene | PathLike, **options: Any) -> PrecisionReport:
     """Error against run time, integrator by integrator, over ladders of tolerances or steps;
     ``options``: integrators (names)."""
-    from massprops.dynamics.precision import precision as run  # deferred: start-up
+    # deferred: start-up
+    from massprops.dynamics.precision import precision as run
+    from massprops.dynamics.systems.model import SystemScene
+    from massprops.dynamics.systems.precision import precision_system
 
-    return run(scene if _is_scene(scene) else load_scene(scene), **options)
+    scene = scene if _is_scene(scene) else load_scene(scene)
+    if isinstance(scene, SystemScene):
+        return precision_system(scene, **options)
+    return run(scene, **options)
 
 
 def _is_scene(value: Any) -> bool:
