@@ -16,11 +16,14 @@ times its difference from the level before (OpenCASCADE's own estimate is not tr
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
+from massprops.cad.faces import ANALYTIC_FACES, face_census
 from massprops.errors import DegenerateMeshError
 from massprops.mesh.facesums import U
 from massprops.mesh.integral import UnitMoments
@@ -32,10 +35,7 @@ from massprops.tolerances import (
     MIN_VOLUME_TO_ERROR,
 )
 
-__all__ = ["ANALYTIC_FACES", "SolidIntegral", "integrate_solid"]
-
-ANALYTIC_FACES = ("plane", "cylinder", "cone", "sphere", "torus")
-"""Face types whose Gauss integration is exact to round-off."""
+__all__ = ["ANALYTIC_FACES", "SolidIntegral", "face_types", "integrate_solid"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,11 +44,11 @@ class SolidIntegral:
     origin m, inertia m⁵ about the COM (file axes), with rounding bounds. integration : None
     (all faces analytic) or (volume m³, com (3,) m, inertia (3, 3) m⁵) bounds of the
     quadrature's remaining error. tolerance : the largest modelling tolerance of its faces,
-    edges and vertices, m. area : m². reach : (3,) m, the bounding box's half extents.
-    faces : {type: count}. valid : OpenCASCADE's BRepCheck verdict for solids with free-form
-    faces (None: not checked; for analytic solids the check would cost more than the
-    integral). An invalid shape (seen: a torus converted to NURBS 1e11 sizes from the origin)
-    can integrate to anything, and the nested levels may agree on it."""
+    edges and vertices, m. area : m², an upper bound (see `massprops.cad.faces`). reach : (3,)
+    m, the bounding box's half extents. faces : {type: count}. valid : OpenCASCADE's BRepCheck
+    verdict for solids with free-form faces (None: not checked; for analytic solids the check
+    would cost more than the integral). An invalid shape (seen: a torus converted to NURBS 1e11
+    sizes from the origin) can integrate to anything, and the nested levels may agree on it."""
 
     origin: np.ndarray
     moments: UnitMoments
@@ -64,78 +64,72 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
                     ) -> SolidIntegral:
     """Integrate one solid (an OCP TopoDS_Shape in the file unit; ``scale`` metres per unit).
     Raises DegenerateMeshError when it encloses no resolvable volume or is inside out."""
-    # optional extra: OCP is imported only once a CAD file is read
-    from OCP.Bnd import Bnd_Box
-    from OCP.BRepBndLib import BRepBndLib
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
-    from OCP.BRepGProp import BRepGProp
-    from OCP.gp import gp_Trsf, gp_Vec
-    from OCP.GProp import GProp_GProps
-    from OCP.TopLoc import TopLoc_Location
-
-    box = Bnd_Box()
-    BRepBndLib.Add_s(shape, box, False)   # the geometry's box, not padded by tolerances
-    lo, hi = _corner(box.CornerMin()), _corner(box.CornerMax())
-    origin = (lo + hi) / 2
-    reach = (hi - lo) / 2
-    if np.max(np.abs(origin)) <= np.max(reach):
+    k = _occ()
+    box = k.Bnd_Box()
+    k.BRepBndLib.Add_s(shape, box, False)   # the geometry's box, not padded by tolerances
+    # plain floats: numpy's per-call cost on 3-vectors adds up to a tenth of a small part's
+    # integral
+    lo, hi = box.CornerMin(), box.CornerMax()
+    x0, y0, z0, x1, y1, z1 = lo.X(), lo.Y(), lo.Z(), hi.X(), hi.Y(), hi.Z()
+    centre = ((x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2)
+    half = ((x1 - x0) / 2, (y1 - y0) / 2, (z1 - z0) / 2)
+    reach = np.array(half)
+    if max(map(abs, centre)) <= max(half):
         # the world origin is already within the part's own size of it: integrating there
         # loses at most a few ulps more, and the copy would cost as much as the integral
         origin = np.zeros(3)
         local = shape
     else:
-        trsf = gp_Trsf()
-        trsf.SetTranslation(gp_Vec(*(-origin)))
+        origin = np.array(centre)
+        trsf = k.gp_Trsf()
+        trsf.SetTranslation(k.gp_Vec(-centre[0], -centre[1], -centre[2]))
         # the placement goes INTO the geometry with the shift: left as a location, BRepGProp
         # would add it back to every point of geometry shifted by -origin (a far part: 20 %
         # wrong)
         placement = shape.Location()
         if not placement.IsIdentity():
             trsf = trsf.Multiplied(placement.Transformation())
-            shape = shape.Located(TopLoc_Location())
-        local = BRepBuilderAPI_Transform(shape, trsf, True).Shape()
+            shape = shape.Located(k.TopLoc_Location())
+        local = k.BRepBuilderAPI_Transform(shape, trsf, True).Shape()
 
-    faces, tolerance = _faces_and_tolerance(local)
-    free_form = any(kind not in ANALYTIC_FACES for kind in faces)
-    surface = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(local, surface)
-    area = surface.Mass()
+    faces, area, free = face_census(local)
+    tolerance = float(k.ShapeTolerance().Tolerance(local, 1, k.SHAPE))  # 1: the largest
+    free_form = bool(free)
 
     levels = []
     if not free_form:
-        props = GProp_GProps()
-        BRepGProp.VolumeProperties_s(local, props, only_closed)
+        props = k.GProp_GProps()
+        k.BRepGProp.VolumeProperties_s(local, props, only_closed)
         levels.append(_values(props))
     else:
         for eps in CAD_ADAPTIVE_EPS:
-            props = GProp_GProps()
-            BRepGProp.VolumeProperties_s(local, props, eps, only_closed)
+            props = k.GProp_GProps()
+            k.BRepGProp.VolumeProperties_s(local, props, eps, only_closed)
             levels.append(_values(props))
         if levels[-1][0] == levels[-2][0]:
-            props = GProp_GProps()
-            BRepGProp.VolumeProperties_s(local, props, CAD_ADAPTIVE_FALLBACK_EPS, only_closed)
+            props = k.GProp_GProps()
+            k.BRepGProp.VolumeProperties_s(local, props, CAD_ADAPTIVE_FALLBACK_EPS,
+                                           only_closed)
             levels.insert(0, _values(props))
     volume, com, inertia = levels[-1]
 
     n = sum(faces.values())
-    k = CAD_ROUNDING_ULPS * max(n, 1) * U
-    box_volume = float(np.prod(2 * reach))
-    volume_err = k * box_volume
+    ulps = CAD_ROUNDING_ULPS * max(n, 1) * U
+    box_volume = 8 * half[0] * half[1] * half[2]
+    volume_err = ulps * box_volume
     if volume == 0 or abs(volume) < MIN_VOLUME_TO_ERROR * volume_err:
         raise DegenerateMeshError(f"{name}: encloses no volume we can resolve ({volume:.3g} "
                                   "file units³); check that it is a solid, not a sheet")
     if volume < 0:
         raise DegenerateMeshError(f"{name}: is inside out (volume {volume:.6g}); reverse the "
                                   "solid's orientation in the CAD tool")
-    com_err = k * box_volume / volume * reach + 2 * U * np.abs(com)
-    inertia_err = np.full((3, 3), k * box_volume * float(reach @ reach))
+    com_err = ulps * box_volume / volume * reach + 2 * U * np.abs(com)
+    inertia_err = np.full((3, 3), ulps * box_volume * (half[0]**2 + half[1]**2 + half[2]**2))
 
     integration, valid = None, None
     if free_form:
         integration = _integration_bar(levels)
-        from OCP.BRepCheck import BRepCheck_Analyzer  # optional extra
-
-        valid = bool(BRepCheck_Analyzer(local).IsValid())
+        valid = bool(k.BRepCheck_Analyzer(local).IsValid())
     s = scale
     moments = UnitMoments(volume * s**3, volume_err * s**3, com * s, com_err * s,
                           inertia * s**5, inertia_err * s**5)
@@ -165,43 +159,35 @@ def _values(props: Any) -> tuple[float, np.ndarray, np.ndarray]:
     """(volume, COM, inertia about the COM) of a GProp_GProps, unit density, file unit."""
     c = props.CentreOfMass()
     m = props.MatrixOfInertia()
-    j = np.array([[m.Value(i, k) for k in (1, 2, 3)] for i in (1, 2, 3)])
-    return props.Mass(), np.array([c.X(), c.Y(), c.Z()]), 0.5 * (j + j.T)
-
-
-def _corner(p: Any) -> np.ndarray:
-    return np.array([p.X(), p.Y(), p.Z()])
-
-
-_SURFACE_NAMES = {"GeomAbs_Plane": "plane", "GeomAbs_Cylinder": "cylinder",
-                  "GeomAbs_Cone": "cone", "GeomAbs_Sphere": "sphere", "GeomAbs_Torus": "torus",
-                  "GeomAbs_BezierSurface": "bezier", "GeomAbs_BSplineSurface": "bspline",
-                  "GeomAbs_SurfaceOfRevolution": "revolution",
-                  "GeomAbs_SurfaceOfExtrusion": "extrusion", "GeomAbs_OffsetSurface": "offset"}
+    xy, xz, yz = (m.Value(1, 2) + m.Value(2, 1)) / 2, (m.Value(1, 3) + m.Value(3, 1)) / 2, \
+        (m.Value(2, 3) + m.Value(3, 2)) / 2
+    j = np.array([[m.Value(1, 1), xy, xz], [xy, m.Value(2, 2), yz], [xz, yz, m.Value(3, 3)]])
+    return props.Mass(), np.array([c.X(), c.Y(), c.Z()]), j
 
 
 def face_types(shape: Any) -> dict[str, int]:
     """{surface type: number of faces} of a shape."""
-    return _faces_and_tolerance(shape)[0]
+    return face_census(shape)[0]
 
 
-def _faces_and_tolerance(shape: Any) -> tuple[dict[str, int], float]:
-    """({surface type: count}, the largest face/edge/vertex tolerance) in the file unit."""
-    from OCP.BRepAdaptor import BRepAdaptor_Surface  # optional extra
+@functools.cache
+def _occ() -> SimpleNamespace:
+    """The OpenCASCADE names used here, imported once (optional extra, loaded with the first
+    CAD file; importing them on every call cost ~0.1 ms, a third of a small part's integral)."""
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.BRepCheck import BRepCheck_Analyzer
+    from OCP.BRepGProp import BRepGProp
+    from OCP.gp import gp_Trsf, gp_Vec
+    from OCP.GProp import GProp_GProps
     from OCP.ShapeAnalysis import ShapeAnalysis_ShapeTolerance
-    from OCP.TopAbs import TopAbs_FACE, TopAbs_SHAPE
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS
+    from OCP.TopAbs import TopAbs_SHAPE
+    from OCP.TopLoc import TopLoc_Location
 
-    counts: dict[Any, int] = {}
-    explorer = TopExp_Explorer(shape, TopAbs_FACE)
-    while explorer.More():
-        kind = BRepAdaptor_Surface(TopoDS.Face(explorer.Current()), False).GetType()
-        counts[kind] = counts.get(kind, 0) + 1
-        explorer.Next()
-    faces: dict[str, int] = {}
-    for kind, n in counts.items():
-        name = _SURFACE_NAMES.get(kind.name, "other")
-        faces[name] = faces.get(name, 0) + n
-    tolerance = ShapeAnalysis_ShapeTolerance().Tolerance(shape, 1, TopAbs_SHAPE)  # 1: largest
-    return faces, float(tolerance)
+    return SimpleNamespace(Bnd_Box=Bnd_Box, BRepBndLib=BRepBndLib,
+                           BRepBuilderAPI_Transform=BRepBuilderAPI_Transform,
+                           BRepCheck_Analyzer=BRepCheck_Analyzer, BRepGProp=BRepGProp,
+                           gp_Trsf=gp_Trsf, gp_Vec=gp_Vec, GProp_GProps=GProp_GProps,
+                           ShapeTolerance=ShapeAnalysis_ShapeTolerance, SHAPE=TopAbs_SHAPE,
+                           TopLoc_Location=TopLoc_Location)
