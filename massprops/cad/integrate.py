@@ -9,9 +9,10 @@ the COM) and converted to SI only now: scaling far-away coordinates first would 
 
 Faces that are all analytic (plane, cylinder, cone, sphere, torus) are integrated by the fixed
 Gauss rules, exact to round-off: ``integration`` is None. With any free-form face (B-spline,
-Bezier, revolution, extrusion, offset, other), the adaptive rule runs at the nested tolerances
-``CAD_ADAPTIVE_EPS``; the last result is reported and the bar is ``CAD_INTEGRATION_SAFETY``
-times its difference from the level before (OpenCASCADE's own estimate is not trusted).
+Bezier, revolution, extrusion, offset, other), see `massprops.cad.freeform`: B-spline and
+Bezier faces whose domain is their parameter rectangle by our own Gauss-Legendre rule per knot
+span (to round-off), the rest by OpenCASCADE's adaptive rule at nested tolerances, each with a
+bar from two levels (OpenCASCADE's own estimate is not trusted).
 """
 
 from __future__ import annotations
@@ -24,16 +25,11 @@ from typing import Any
 import numpy as np
 
 from massprops.cad.faces import ANALYTIC_FACES, face_census
+from massprops.cad.freeform import integrate_free_form, occ_levels
 from massprops.errors import DegenerateMeshError
 from massprops.mesh.facesums import U
 from massprops.mesh.integral import UnitMoments
-from massprops.tolerances import (
-    CAD_ADAPTIVE_EPS,
-    CAD_ADAPTIVE_FALLBACK_EPS,
-    CAD_INTEGRATION_SAFETY,
-    CAD_ROUNDING_ULPS,
-    MIN_VOLUME_TO_ERROR,
-)
+from massprops.tolerances import CAD_ROUNDING_ULPS, MIN_VOLUME_TO_ERROR
 
 __all__ = ["ANALYTIC_FACES", "SolidIntegral", "face_types", "integrate_solid"]
 
@@ -58,6 +54,7 @@ class SolidIntegral:
     reach: np.ndarray
     faces: dict[str, int]
     valid: bool | None = None
+    method: str = "gauss"
 
 
 def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = True
@@ -96,26 +93,16 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     tolerance = float(k.ShapeTolerance().Tolerance(local, 1, k.SHAPE))  # 1: the largest
     free_form = bool(free)
 
-    levels = []
-    if not free_form:
-        props = k.GProp_GProps()
-        k.BRepGProp.VolumeProperties_s(local, props, only_closed)
-        levels.append(_values(props))
-    else:
-        for eps in CAD_ADAPTIVE_EPS:
-            props = k.GProp_GProps()
-            k.BRepGProp.VolumeProperties_s(local, props, eps, only_closed)
-            levels.append(_values(props))
-        if levels[-1][0] == levels[-2][0]:
-            props = k.GProp_GProps()
-            k.BRepGProp.VolumeProperties_s(local, props, CAD_ADAPTIVE_FALLBACK_EPS,
-                                           only_closed)
-            levels.insert(0, _values(props))
-    volume, com, inertia = levels[-1]
-
     n = sum(faces.values())
-    ulps = CAD_ROUNDING_ULPS * max(n, 1) * U
     box_volume = 8 * half[0] * half[1] * half[2]
+    integration, method = None, "gauss"
+    if not free_form:
+        volume, com, inertia = occ_levels(local, only_closed, True)[0]
+    else:
+        (volume, com, inertia), integration, method = integrate_free_form(
+            local, only_closed, box_volume, centre if local is shape else (0.0, 0.0, 0.0))
+
+    ulps = CAD_ROUNDING_ULPS * max(n, 1) * U
     volume_err = ulps * box_volume
     if volume == 0 or abs(volume) < MIN_VOLUME_TO_ERROR * volume_err:
         raise DegenerateMeshError(f"{name}: encloses no volume we can resolve ({volume:.3g} "
@@ -126,9 +113,8 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     com_err = ulps * box_volume / volume * reach + 2 * U * np.abs(com)
     inertia_err = np.full((3, 3), ulps * box_volume * (half[0]**2 + half[1]**2 + half[2]**2))
 
-    integration, valid = None, None
+    valid = None
     if free_form:
-        integration = _integration_bar(levels)
         valid = bool(k.BRepCheck_Analyzer(local).IsValid())
     s = scale
     moments = UnitMoments(volume * s**3, volume_err * s**3, com * s, com_err * s,
@@ -136,33 +122,7 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     if integration is not None:
         integration = (integration[0] * s**3, integration[1] * s, integration[2] * s**5)
     return SolidIntegral(origin * s, moments, integration, tolerance * s, area * s * s,
-                         reach * s, faces, valid)
-
-
-def _integration_bar(levels: list) -> tuple[float, np.ndarray, np.ndarray]:
-    """CAD_INTEGRATION_SAFETY x the last difference between nested levels; a last difference
-    of exactly zero (both at the rule's floor) falls back on the one before."""
-    bars = []
-    for (v0, c0, j0), (v1, c1, j1) in zip(levels[:-1], levels[1:]):
-        bars.append((abs(v1 - v0), np.abs(c1 - c0), np.abs(j1 - j0)))
-    volume, com, inertia = bars[-1]
-    if volume == 0 and len(bars) > 1:
-        volume, com, inertia = bars[-2]
-    f = CAD_INTEGRATION_SAFETY
-    # the results themselves carry round-off: a bar never below a few ulps of the value
-    v_last, c_last, j_last = levels[-1]
-    return (f * volume + 4 * U * abs(v_last), f * com + 4 * U * np.abs(c_last),
-            f * inertia + 4 * U * np.abs(j_last))
-
-
-def _values(props: Any) -> tuple[float, np.ndarray, np.ndarray]:
-    """(volume, COM, inertia about the COM) of a GProp_GProps, unit density, file unit."""
-    c = props.CentreOfMass()
-    m = props.MatrixOfInertia()
-    xy, xz, yz = (m.Value(1, 2) + m.Value(2, 1)) / 2, (m.Value(1, 3) + m.Value(3, 1)) / 2, \
-        (m.Value(2, 3) + m.Value(3, 2)) / 2
-    j = np.array([[m.Value(1, 1), xy, xz], [xy, m.Value(2, 2), yz], [xz, yz, m.Value(3, 3)]])
-    return props.Mass(), np.array([c.X(), c.Y(), c.Z()]), j
+                         reach * s, faces, valid, method)
 
 
 def face_types(shape: Any) -> dict[str, int]:
@@ -178,16 +138,14 @@ def _occ() -> SimpleNamespace:
     from OCP.BRepBndLib import BRepBndLib
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
     from OCP.BRepCheck import BRepCheck_Analyzer
-    from OCP.BRepGProp import BRepGProp
     from OCP.gp import gp_Trsf, gp_Vec
-    from OCP.GProp import GProp_GProps
     from OCP.ShapeAnalysis import ShapeAnalysis_ShapeTolerance
     from OCP.TopAbs import TopAbs_SHAPE
     from OCP.TopLoc import TopLoc_Location
 
     return SimpleNamespace(Bnd_Box=Bnd_Box, BRepBndLib=BRepBndLib,
                            BRepBuilderAPI_Transform=BRepBuilderAPI_Transform,
-                           BRepCheck_Analyzer=BRepCheck_Analyzer, BRepGProp=BRepGProp,
-                           gp_Trsf=gp_Trsf, gp_Vec=gp_Vec, GProp_GProps=GProp_GProps,
+                           BRepCheck_Analyzer=BRepCheck_Analyzer,
+                           gp_Trsf=gp_Trsf, gp_Vec=gp_Vec,
                            ShapeTolerance=ShapeAnalysis_ShapeTolerance, SHAPE=TopAbs_SHAPE,
                            TopLoc_Location=TopLoc_Location)
