@@ -135,7 +135,8 @@ def table_nurbs():
           "massprops: its integration bar")
     forms = {"sphere": (BRepPrimAPI_MakeSphere(1.0).Shape(), 4 * math.pi / 3, 0.4),
              "torus": (BRepPrimAPI_MakeTorus(2.0, 0.5).Shape(), 2 * math.pi**2 * 2 * 0.25,
-                       4 + 0.75 * 0.25)}
+                       4 + 0.75 * 0.25),
+             "cylinder": (BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape(), 2 * math.pi, 0.5)}
     print(f"{'solid':>7} {'method':>20} {'time [ms]':>10} {'V err':>9} {'J err':>9} "
           f"{'bar V':>9} {'bar J':>9}")
     for name, (shape, v, jfac) in forms.items():
@@ -147,10 +148,10 @@ def table_nurbs():
             label = "plain Gauss" if eps is None else f"plain eps={eps:g}"
             print(f"{name:>7} {label:>20} {t * 1e3:10.2f} {abs(vol / v - 1):9.1e} "
                   f"{abs(j[2, 2] / j_exact - 1):9.1e} {'':>9} {'':>9}")
-        t = best_time(lambda s=n, k=name: integrate_solid(s, 1.0, k), repeat=3)
         r = integrate_solid(n, 1.0, name)
+        t = best_time(lambda s=n, k=name: integrate_solid(s, 1.0, k), repeat=3)
         bv, _, bj = r.integration
-        print(f"{name:>7} {'massprops':>20} {t * 1e3:10.2f} "
+        print(f"{name:>7} {'massprops ' + r.method:>20} {t * 1e3:10.2f} "
               f"{abs(r.moments.volume / v - 1):9.1e} "
               f"{abs(r.moments.inertia[2, 2] / j_exact - 1):9.1e} {bv / v:9.1e} "
               f"{bj[2, 2] / j_exact:9.1e}")

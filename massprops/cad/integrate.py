@@ -31,7 +31,7 @@ from massprops.mesh.facesums import U
 from massprops.mesh.integral import UnitMoments
 from massprops.tolerances import CAD_ROUNDING_ULPS, MIN_VOLUME_TO_ERROR
 
-__all__ = ["ANALYTIC_FACES", "SolidIntegral", "face_types", "integrate_solid"]
+__all__ = ["ANALYTIC_FACES", "SolidIntegral", "face_types", "integrate_solid", "localise"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,32 +62,8 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     """Integrate one solid (an OCP TopoDS_Shape in the file unit; ``scale`` metres per unit).
     Raises DegenerateMeshError when it encloses no resolvable volume or is inside out."""
     k = _occ()
-    box = k.Bnd_Box()
-    k.BRepBndLib.Add_s(shape, box, False)   # the geometry's box, not padded by tolerances
-    # plain floats: numpy's per-call cost on 3-vectors adds up to a tenth of a small part's
-    # integral
-    lo, hi = box.CornerMin(), box.CornerMax()
-    x0, y0, z0, x1, y1, z1 = lo.X(), lo.Y(), lo.Z(), hi.X(), hi.Y(), hi.Z()
-    centre = ((x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2)
-    half = ((x1 - x0) / 2, (y1 - y0) / 2, (z1 - z0) / 2)
+    local, origin, centre, half = localise(shape)
     reach = np.array(half)
-    if max(map(abs, centre)) <= max(half):
-        # the world origin is already within the part's own size of it: integrating there
-        # loses at most a few ulps more, and the copy would cost as much as the integral
-        origin = np.zeros(3)
-        local = shape
-    else:
-        origin = np.array(centre)
-        trsf = k.gp_Trsf()
-        trsf.SetTranslation(k.gp_Vec(-centre[0], -centre[1], -centre[2]))
-        # the placement goes INTO the geometry with the shift: left as a location, BRepGProp
-        # would add it back to every point of geometry shifted by -origin (a far part: 20 %
-        # wrong)
-        placement = shape.Location()
-        if not placement.IsIdentity():
-            trsf = trsf.Multiplied(placement.Transformation())
-            shape = shape.Located(k.TopLoc_Location())
-        local = k.BRepBuilderAPI_Transform(shape, trsf, True).Shape()
 
     faces, area, free = face_census(local)
     tolerance = float(k.ShapeTolerance().Tolerance(local, 1, k.SHAPE))  # 1: the largest
@@ -100,7 +76,8 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
         volume, com, inertia = occ_levels(local, only_closed, True)[0]
     else:
         (volume, com, inertia), integration, method = integrate_free_form(
-            local, only_closed, box_volume, centre if local is shape else (0.0, 0.0, 0.0))
+            local, only_closed, box_volume,
+            centre if not origin.any() else (0.0, 0.0, 0.0))
 
     ulps = CAD_ROUNDING_ULPS * max(n, 1) * U
     volume_err = ulps * box_volume
@@ -123,6 +100,36 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
         integration = (integration[0] * s**3, integration[1] * s, integration[2] * s**5)
     return SolidIntegral(origin * s, moments, integration, tolerance * s, area * s * s,
                          reach * s, faces, valid, method)
+
+
+def localise(shape: Any) -> tuple[Any, np.ndarray, tuple, tuple]:
+    """(the shape with its geometry translated so that its bounding box's centre is the origin
+    (the shape itself when the world origin is already within its own size), the origin (3,),
+    the box's centre and half extents), all in the file frame and unit."""
+    k = _occ()
+    box = k.Bnd_Box()
+    k.BRepBndLib.Add_s(shape, box, False)   # the geometry's box, not padded by tolerances
+    # plain floats: numpy's per-call cost on 3-vectors adds up to a tenth of a small part's
+    # integral
+    lo, hi = box.CornerMin(), box.CornerMax()
+    x0, y0, z0, x1, y1, z1 = lo.X(), lo.Y(), lo.Z(), hi.X(), hi.Y(), hi.Z()
+    centre = ((x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2)
+    half = ((x1 - x0) / 2, (y1 - y0) / 2, (z1 - z0) / 2)
+    if max(map(abs, centre)) <= max(half):
+        # the world origin is already within the part's own size of it: integrating there
+        # loses at most a few ulps more, and the copy would cost as much as the integral
+        return shape, np.zeros(3), centre, half
+    trsf = k.gp_Trsf()
+    trsf.SetTranslation(k.gp_Vec(-centre[0], -centre[1], -centre[2]))
+    # the placement goes INTO the geometry with the shift: left as a location, BRepGProp
+    # would add it back to every point of geometry shifted by -origin (a far part: 20 %
+    # wrong)
+    placement = shape.Location()
+    if not placement.IsIdentity():
+        trsf = trsf.Multiplied(placement.Transformation())
+        shape = shape.Located(k.TopLoc_Location())
+    local = k.BRepBuilderAPI_Transform(shape, trsf, True).Shape()
+    return local, np.array(centre), centre, half
 
 
 def face_types(shape: Any) -> dict[str, int]:
