@@ -63,6 +63,8 @@ class CadInspection:
                    "tolerance": r.integral.tolerance}
             if r.solid.colour is not None:
                 cad["colour"] = list(r.solid.colour)
+            if r.solid.material is not None:
+                cad["material"] = dict(r.solid.material)
             d["cad"] = cad
             if r.repairs is not None:
                 d["repairs"] = r.repairs
