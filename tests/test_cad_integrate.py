@@ -177,3 +177,18 @@ def test_far_nurbs_input_bar_covers_the_rounded_poles(tmp_path):
     error = abs(solid.properties.volume - volume)
     assert error > 10 * solid.integration.volume     # the poles' rounding dominates
     assert error <= sum(b.volume for b in bars) <= 1e-4 * volume
+
+
+def test_nurbs_rule_in_small_blocks_agrees(monkeypatch):
+    """A surface of many spans is evaluated in blocks of u rows: blocks of a few points give
+    the same moments (to round-off) as one block."""
+    import massprops.cad.nurbs as nurbs
+
+    shape = cp.nurbs(cp.make("torus", 1.0))
+    whole = integrate_solid(shape, 1.0, "torus")
+    monkeypatch.setattr(nurbs, "_BLOCK_POINTS", 7)
+    blocked = integrate_solid(shape, 1.0, "torus")
+    volume, _, diag = cp.closed_forms("torus", 1.0)
+    assert blocked.moments.volume == pytest.approx(whole.moments.volume, rel=1e-14)
+    assert blocked.moments.volume == pytest.approx(volume, rel=1e-14)
+    assert np.allclose(np.diag(blocked.moments.inertia), diag, rtol=1e-14, atol=0)

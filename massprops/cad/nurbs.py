@@ -225,6 +225,12 @@ def _basis(knots: np.ndarray, degree: int, at: np.ndarray) -> tuple[np.ndarray, 
     return np.nan_to_num(spline(at)), np.nan_to_num(spline(at, 1))
 
 
+_BLOCK_POINTS = 65536
+"""Points evaluated at once: a surface of many knot spans is taken in blocks of u rows, so the
+arrays stay a few MB whatever its size (a 200 x 200-span patch at 15 points per span is 9M
+points)."""
+
+
 def _rule(n: int, tu: np.ndarray, pu: int, tv: np.ndarray, pv: int, h: np.ndarray,
           urange: tuple[float, float], vrange: tuple[float, float], apex: np.ndarray
           ) -> tuple[np.ndarray, np.ndarray]:
@@ -234,6 +240,31 @@ def _rule(n: int, tu: np.ndarray, pu: int, tv: np.ndarray, pv: int, h: np.ndarra
     v, wv = _nodes(tv, *vrange, n)
     bu, dbu = _basis(tu, pu, u)
     bv, dbv = _basis(tv, pv, v)
+    p = np.asarray(apex, dtype=float)
+    rows = max(1, _BLOCK_POINTS // len(v))
+    sums = np.zeros(14 + 13)   # Σw r·N, Σ w r·N d (3), Σ w r·N d dᵀ (9), area; then scales
+    for start in range(0, len(u), rows):
+        block = slice(start, start + rows)
+        sums += _block(bu[block], dbu[block], wu[block], bv, dbv, wv, h, p)
+    volume, first_d, dd, area = sums[0], sums[1:4], sums[4:13].reshape(3, 3), sums[13]
+    # the cone from the apex over each patch: points apex + t d, t in [0, 1], dV = t² dt d·N
+    values = np.empty(14)
+    values[0] = volume / 3
+    values[1:4] = p * values[0] + first_d / 4
+    cross = np.outer(p, first_d)
+    values[4:13] = (np.outer(p, p) * values[0] + (cross + cross.T) / 4 + dd / 5).ravel()
+    values[13] = area
+    scale = np.empty(13)
+    scale[0] = sums[14] / 3
+    scale[1:4] = sums[15] / 3
+    scale[4:13] = sums[16] / 3
+    return values, scale
+
+
+def _block(bu: np.ndarray, dbu: np.ndarray, wu: np.ndarray, bv: np.ndarray, dbv: np.ndarray,
+           wv: np.ndarray, h: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Sums over a block of u rows (all v): Σ w d·N, Σ w d·N d, Σ w d·N d dᵀ, Σ w |N| (the
+    area), then Σ |w d·N|, Σ |w d·N| r, Σ |w d·N| r² (r = |d| + |P|), padded to 27."""
     nu, nv = h.shape[:2]
     flat = h.reshape(nu, nv * 4)
     along_v = (bu @ flat).reshape(-1, nv, 4)           # (mu, nv, 4)
@@ -246,22 +277,16 @@ def _rule(n: int, tu: np.ndarray, pu: int, tv: np.ndarray, pv: int, h: np.ndarra
     sv = (av[..., :3] - av[..., 3:] * s) / w
     normal = np.cross(su, sv)
     weight = np.outer(wu, wv)
-    d = s.reshape(-1, 3) - apex
+    d = s.reshape(-1, 3) - p
     wr = weight.ravel() * np.sum(d * normal.reshape(-1, 3), axis=1)
-    # the cone from the apex over each patch: points apex + t d, t in [0, 1], dV = t² dt d·N
-    p = np.asarray(apex, dtype=float)
-    values = np.empty(14)
-    values[0] = wr.sum() / 3
-    first_d = wr @ d
-    values[1:4] = p * values[0] + first_d / 4
-    dd = (d * wr[:, None]).T @ d
-    cross = np.outer(p, first_d)
-    values[4:13] = (np.outer(p, p) * values[0] + (cross + cross.T) / 4 + dd / 5).ravel()
-    values[13] = np.sum(weight * np.linalg.norm(normal, axis=-1))
+    out = np.zeros(27)
+    out[0] = wr.sum()
+    out[1:4] = wr @ d
+    out[4:13] = ((d * wr[:, None]).T @ d).ravel()
+    out[13] = np.sum(weight * np.linalg.norm(normal, axis=-1))
     wa = np.abs(wr)
     r = np.linalg.norm(d, axis=1) + np.linalg.norm(p)
-    scale = np.empty(13)
-    scale[0] = wa.sum() / 3
-    scale[1:4] = wa @ r / 3
-    scale[4:13] = wa @ (r * r) / 3
-    return values, scale
+    out[14] = wa.sum()
+    out[15] = wa @ r
+    out[16] = wa @ (r * r)
+    return out
