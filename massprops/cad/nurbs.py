@@ -1,14 +1,19 @@
 """B-spline and Bezier faces whose domain is a parameter rectangle, integrated by our own rule.
 
-Why. OpenCASCADE's adaptive rule stalls near 1e-10 (volume) and 4e-8 (inertia) on NURBS forms
-of analytic solids whatever ``Eps`` it is given (its estimate meanwhile says 2e-16): it
-integrates a face through its boundary curves, one adaptive Kronrod rule per edge with a fixed
-Gauss rule across, so a rational integrand is never refined in both directions at once. Most
-free-form faces of real exports and of converted analytic solids are not trimmed at all: their
-domain is the rectangle of their parameters (a NURBS sphere, torus, a cylinder's wall). There
-the integral is a plain tensor-product one, and Gauss-Legendre per knot span in u and in v
-converges geometrically on the rational integrands (each span's integrand is analytic, its
-poles away from the span).
+Why. OpenCASCADE's adaptive rule (``BRepGProp_Gauss``, the ``Eps`` overloads) stalls near 1e-10
+(volume) and 4e-8 (inertia) on NURBS forms of analytic solids whatever ``Eps`` it is given,
+while its estimate says 2e-16. Reading its source: (1) the error it refines on is the MASS's
+only (the n-point against the 2n/3-point Gauss rule on each subinterval), so the inertia
+integrals are never checked; (2) each direction gets at most 32 subintervals, and when that
+budget is spent it stops, reporting the last estimate rather than failing; (3) every face with
+a wire (every face of a B-rep, even an untrimmed one) is integrated through its boundary, the
+inner integral running from the surface's bound to each boundary point, so the rational
+integrand is cut at the pcurves' Gauss points rather than at its own knots. Most free-form
+faces of real exports and of converted analytic solids are not trimmed at all: their domain is
+the rectangle of their parameters (a NURBS sphere, torus, a cylinder's wall). There the
+integral is a plain tensor-product one, and Gauss-Legendre per knot span in u and in v
+converges geometrically on every moment (each span's integrand is analytic, its poles away
+from the span).
 
 Method. Each face's share is the cone from an apex P over it (over a closed surface the cones
 add up to the solid whatever P; OpenCASCADE takes P = the mean of the shape's vertices, and
