@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from massprops.cad.faces import ANALYTIC_FACES, face_census
+from massprops.cad.faces import ANALYTIC_FACES, face_census, is_analytic, occ_area
 from massprops.cad.nurbs import RawMoments, integrate_rectangles, rectangle
 from massprops.mesh.facesums import U
 from massprops.tolerances import (
@@ -54,10 +54,11 @@ def _occ() -> SimpleNamespace:
 
 def integrate_free_form(local: Any, only_closed: bool, box_volume: float,
                         centre: tuple[float, float, float]
-                        ) -> tuple[Values, tuple[float, np.ndarray, np.ndarray], str]:
-    """((volume, COM, inertia about the COM), (their integration bars), method) of a solid
-    with free-form faces about its own origin, file unit; centre: its bounding box's.
-    method: "own" (every face by our rule), "mixed", or "adaptive" (all by OpenCASCADE's)."""
+                        ) -> tuple[Values, tuple[float, np.ndarray, np.ndarray], str, float]:
+    """((volume, COM, inertia about the COM), (their integration bars), method, the area of
+    the free-form faces) of a solid with free-form faces about its own origin, file unit;
+    centre: its bounding box's. method: "own" (every face by our rule), "mixed", or
+    "adaptive" (all by OpenCASCADE's)."""
     k = _occ()
     rects, rest = [], []
     explorer = k.Explorer(local, k.FACE)
@@ -69,17 +70,20 @@ def integrate_free_form(local: Any, only_closed: bool, box_volume: float,
         else:
             rects.append((face, box))
         explorer.Next()
+    free_rest = [face for face in rest if not is_analytic(face)]
+    everything = [face for face, _ in rects] + free_rest
     if not rects:
-        return _adaptive(local, only_closed)
+        return (*_adaptive(local, only_closed), occ_area(everything))
     try:
         if not rest:
-            return (*_central(integrate_rectangles(rects)), "own")
+            raw = integrate_rectangles(rects)
+            return (*_central(raw), "own", raw.area)
         raw = _mixed(rects, rest, box_volume, centre)
     except ValueError:   # a surface our evaluator does not take: all to OpenCASCADE
-        return _adaptive(local, only_closed)
+        return (*_adaptive(local, only_closed), occ_area(everything))
     if raw is None or not _agrees(local, only_closed, raw.volume, box_volume):
-        return _adaptive(local, only_closed)
-    return (*_central(raw), "mixed")
+        return (*_adaptive(local, only_closed), occ_area(everything))
+    return (*_central(raw), "mixed", raw.area + occ_area(free_rest))
 
 
 def _agrees(local: Any, only_closed: bool, volume: float, box_volume: float) -> bool:
@@ -161,6 +165,7 @@ def occ_levels(shape: Any, only_closed: bool, analytic: bool) -> list[Values]:
 
 def _adaptive(local: Any, only_closed: bool
               ) -> tuple[Values, tuple[float, np.ndarray, np.ndarray], str]:
+    """The whole solid by OpenCASCADE's adaptive levels."""
     levels = occ_levels(local, only_closed, False)
     return levels[-1], level_bar(levels), "adaptive"
 

@@ -65,7 +65,7 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     local, origin, centre, half = localise(shape)
     reach = np.array(half)
 
-    faces, area, free = face_census(local)
+    faces, area, free = face_census(local, free_area=False)
     tolerance = float(k.ShapeTolerance().Tolerance(local, 1, k.SHAPE))  # 1: the largest
     free_form = bool(free)
 
@@ -75,9 +75,10 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     if not free_form:
         volume, com, inertia = occ_levels(local, only_closed, True)[0]
     else:
-        (volume, com, inertia), integration, method = integrate_free_form(
+        (volume, com, inertia), integration, method, free_area = integrate_free_form(
             local, only_closed, box_volume,
             centre if not origin.any() else (0.0, 0.0, 0.0))
+        area += free_area
 
     ulps = CAD_ROUNDING_ULPS * max(n, 1) * U
     volume_err = ulps * box_volume
