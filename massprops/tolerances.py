@@ -169,7 +169,8 @@ the difference) of that size too."""
 
 NURBS_MAX_ORDER = 48
 """The most points per knot span tried; a face not settled by then (a surface nearly singular
-inside its domain) keeps the last difference as its bar, however large."""
+inside its domain, converging slowly: its last difference would not bound its error) sends the
+whole solid to OpenCASCADE's adaptive rule and its two-level bar."""
 
 NURBS_RATIONAL_START = 6
 """On a rational patch that rule starts this many points per span above the order exact for

@@ -227,3 +227,16 @@ def test_lofted_bspline_wall_with_analytic_caps_agrees_with_opencascade():
     assert abs(m.inertia[2, 2] - levels[1][1]) <= bar_j[2, 2] + m.inertia_err[2, 2] + occ_bar_j
     frustum = math.pi * 2.0 * (1.0 + 0.5 + 0.25) / 3
     assert abs(m.volume / frustum - 1) < 1e-8
+
+
+def test_a_face_the_rule_does_not_settle_on_goes_to_opencascade(monkeypatch):
+    """Orders that never agree (an agreement of 0) up to the last one allowed: the solid goes to
+    the adaptive rule, whose bar still holds the error."""
+    import massprops.cad.nurbs as nurbs
+
+    monkeypatch.setattr(nurbs, "NURBS_AGREEMENT", 0.0)
+    monkeypatch.setattr(nurbs, "NURBS_MAX_ORDER", 17)
+    integral = integrate_solid(cp.nurbs(cp.make("sphere", 1.0)), 1.0, "sphere")
+    assert integral.method == "adaptive"
+    volume, _, _ = cp.closed_forms("sphere", 1.0)
+    assert abs(integral.moments.volume - volume) <= integral.integration[0]

@@ -79,7 +79,7 @@ def integrate_free_form(local: Any, only_closed: bool, box_volume: float,
             raw = integrate_rectangles(rects)
             return (*_central(raw), "own", raw.area)
         raw = _mixed(rects, rest, box_volume, centre)
-    except ValueError:   # a surface our evaluator does not take: all to OpenCASCADE
+    except ValueError:   # a surface our rule does not take or settle on: all to OpenCASCADE
         return (*_adaptive(local, only_closed), occ_area(everything))
     if raw is None or not _agrees(local, only_closed, raw.volume, box_volume):
         return (*_adaptive(local, only_closed), occ_area(everything))

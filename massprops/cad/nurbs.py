@@ -135,7 +135,8 @@ def integrate_rectangles(faces: list[tuple[Any, tuple[float, float, float, float
                          apex: np.ndarray | None = None) -> RawMoments:
     """The raw moments about the origin of the faces (each with its rectangle from
     `rectangle`), each face's share being the cone from ``apex`` (default the origin) over
-    it, summed. ValueError when a surface does not evaluate there (the caller falls back)."""
+    it, summed. ValueError when a surface does not evaluate there or the rule does not settle
+    by ``NURBS_MAX_ORDER`` (the caller falls back)."""
     apex = np.zeros(3) if apex is None else np.asarray(apex, dtype=float)
     total = np.zeros(14)
     err = np.zeros(13)
@@ -169,8 +170,12 @@ def _face(face: Any, box: tuple[float, float, float, float], apex: np.ndarray
             raise ValueError("the surface does not evaluate on its rectangle")
         if previous is not None:
             diff = np.abs(values[:13] - previous[:13])
-            if np.all(diff <= NURBS_AGREEMENT * scale) or n >= NURBS_MAX_ORDER:
+            if np.all(diff <= NURBS_AGREEMENT * scale):
                 return values, CAD_INTEGRATION_SAFETY * diff
+            if n >= NURBS_MAX_ORDER:
+                # not settled: a slowly converging rule's last difference need not bound its
+                # error, so the caller hands the solid to the adaptive rule and its bar
+                raise ValueError("the Gauss rule did not settle on this face")
         previous = values
         n += NURBS_ORDER_STEP
 
