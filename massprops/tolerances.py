@@ -154,3 +154,25 @@ PROJECTION_ATOL_ULPS = 64
 is within this many ulps of the system size (positions, m) or of its speed scale (velocities):
 a few Newton iterations from an integrator step's O(rtol) drift reach it; the round-off of
 evaluating Φ itself (a sum of a few products of size-scale numbers) is ~10 ulps."""
+
+NURBS_ORDER_STEP = 2
+"""Free-form faces integrated by our own tensor-product Gauss rule (massprops.cad.nurbs): the
+number of points per knot span grows by this many between the two orders compared (rational
+quadratic patches of a NURBS sphere, torus, cylinder, measured: each step gains 2.3 digits,
+so the last difference over-states the last result's error ~200x until both reach round-off)."""
+
+NURBS_AGREEMENT = 4e-15
+"""Two orders of that rule agree when every moment differs by at most this fraction of the
+integral of its absolute integrand: the Gauss sums' round-off floor measured on those patches
+is 1e-16..1.5e-15 of it, so agreement means the kept result is at round-off, and the bar (twice
+the difference) of that size too."""
+
+NURBS_MAX_ORDER = 48
+"""The most points per knot span tried; a face not settled by then (a surface nearly singular
+inside its domain, converging slowly: its last difference would not bound its error) sends the
+whole solid to OpenCASCADE's adaptive rule and its two-level bar."""
+
+NURBS_RATIONAL_START = 6
+"""On a rational patch that rule starts this many points per span above the order exact for
+polynomials: the rational quadratic patches measured reach round-off at 15-19 points, so the
+orders below (7-11) are wasted work; the bar still comes from two orders compared."""

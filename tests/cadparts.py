@@ -181,3 +181,46 @@ def write_assembly(parts, path, name: str = "assembly") -> None:
     writer.SetNameMode(True)
     assert writer.Transfer(doc, STEPControl_AsIs)
     assert int(writer.Write(str(path))) == 1
+
+
+def write_named(parts, path, fmt: str) -> None:
+    """parts: [(name, shape, material or None)] in millimetres -> a STEP (with material
+    designations, density in g/cm³ as OpenCASCADE's translator writes it) or IGES (names as
+    entity name properties, solids as B-rep) file of free parts."""
+    from OCP.IGESCAFControl import IGESCAFControl_Writer
+    from OCP.TCollection import TCollection_HAsciiString
+
+    doc = TDocStd_Document(TCollection_ExtendedString("named"))
+    XCAFDoc_DocumentTool.SetLengthUnit_s(doc, 0.001)
+    tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    materials = XCAFDoc_DocumentTool.MaterialTool_s(doc.Main())
+    for name, shape, material in parts:
+        label = tool.AddShape(shape, False)
+        TDataStd_Name.Set_s(label, TCollection_ExtendedString(name))
+        if material is not None:
+            title, density = material
+            materials.SetMaterial(label, TCollection_HAsciiString(title),
+                                  TCollection_HAsciiString(""), density / 1000.0,
+                                  TCollection_HAsciiString("density"),
+                                  TCollection_HAsciiString("POSITIVE_RATIO_MEASURE"))
+    if fmt == "step":
+        writer = STEPCAFControl_Writer()
+        for key in ("write.step.unit", "xstep.cascade.unit"):
+            Interface_Static.SetCVal_s(key, "MM")
+        writer.SetNameMode(True)
+        writer.SetMaterialMode(True)
+        assert writer.Transfer(doc, STEPControl_AsIs)
+        assert int(writer.Write(str(path))) == 1
+        return
+    from OCP.IGESControl import IGESControl_Controller
+
+    IGESControl_Controller.Init_s()   # registers the parameters below
+    assert Interface_Static.SetIVal_s("write.iges.brep.mode", 1)   # solids, not loose faces
+    assert Interface_Static.SetCVal_s("write.iges.unit", "MM")
+    writer = IGESCAFControl_Writer()   # after: it takes the modes when made
+    writer.SetNameMode(True)
+    try:
+        assert writer.Transfer(doc)
+        assert writer.Write(str(path))
+    finally:
+        Interface_Static.SetIVal_s("write.iges.brep.mode", 0)

@@ -20,6 +20,7 @@ from massprops.mesh.integral import (
     check_density_mass,
     properties_from_moments,
 )
+from massprops.repair.bars import with_repair_bar
 
 __all__ = ["CadInspection", "SolidResult", "inspect_cad", "load_density_map"]
 
@@ -37,6 +38,7 @@ class SolidResult:
     integration: Uncertainty | None
     input: Uncertainty | None
     warnings: tuple[str, ...]
+    repairs: dict | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,7 +63,11 @@ class CadInspection:
                    "tolerance": r.integral.tolerance}
             if r.solid.colour is not None:
                 cad["colour"] = list(r.solid.colour)
+            if r.solid.material is not None:
+                cad["material"] = dict(r.solid.material)
             d["cad"] = cad
+            if r.repairs is not None:
+                d["repairs"] = r.repairs
             d["placement"] = r.placement.tolist()
             d["warnings"] = list(r.warnings)
             out.append(d)
@@ -79,9 +85,12 @@ class CadInspection:
 
 def _bars(props: MassProperties, integration: Uncertainty | None,
           data: Uncertainty | None) -> dict:
-    return {"rounding": props.uncertainty.rounding.as_dict(),
-            "integration": None if integration is None else integration.as_dict(),
-            "input": None if data is None else data.as_dict()}
+    out = {"rounding": props.uncertainty.rounding.as_dict(),
+           "integration": None if integration is None else integration.as_dict(),
+           "input": None if data is None else data.as_dict()}
+    if props.uncertainty.repair is not None:
+        out["repair"] = props.uncertainty.repair.as_dict()
+    return out
 
 
 def load_density_map(path: str | os.PathLike) -> list[tuple[str, float]]:
@@ -114,13 +123,15 @@ def load_density_map(path: str | os.PathLike) -> list[tuple[str, float]]:
 def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
                 mass: float | None = None, unit: str | None = None,
                 density_map: list[tuple[str, float]] | None = None,
-                allow_open: bool = False) -> CadInspection:
+                allow_open: bool = False, shell: float | None = None) -> CadInspection:
     """Read a CAD file and integrate every solid (see `massprops.cad.integrate`).
 
     density : kg/m³ for solids the map does not name (default 1). mass : kg, the TOTAL mass;
     the density (uniform) follows from the total volume; not with a density or a map.
     unit : BREP's unit (default m); for STEP/IGES only the file's own (else UsageError).
-    Raises MeshTopologyError for an open shell (unless allow_open).
+    shell : a wall thickness in metres: every face, open or closed, is the mid-surface of a
+    wall that thick (`massprops.cad.shell`), its model bar under ``uncertainty.repair``.
+    Raises MeshTopologyError for an open shell (unless allow_open or shell).
     """
     check_density_mass(density, mass)
     if mass is not None and density_map:
@@ -131,8 +142,16 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
     if not cad.solids:
         raise MeshTopologyError(f"{cad.name}: holds no solid; check that the file has 3D "
                                 "geometry (not only curves or points)")
-    integrals = []
+    integrals, shells = [], []
     for solid in cad.solids:
+        if shell is not None:
+            from massprops.cad.shell import shell_solid  # same layer; only with --shell
+
+            integral, bar, record = shell_solid(solid.shape, cad.scale,
+                                                f"{cad.name}: {solid.path}", shell)
+            integrals.append(integral)
+            shells.append((bar, record))
+            continue
         if not solid.closed and not allow_open:
             raise MeshTopologyError(
                 f"{cad.name}: {solid.path} is an open shell, not a closed solid: its volume "
@@ -144,10 +163,15 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
         total_volume = sum(i.moments.volume for i in integrals)
         densities = [mass / total_volume] * len(integrals)
     results = []
-    for solid, integral, rho in zip(cad.solids, integrals, densities):
+    for k, (solid, integral, rho) in enumerate(zip(cad.solids, integrals, densities)):
         props = properties_from_moments(integral.origin, integral.moments, density=rho,
                                         mass=None)
-        notes = [] if solid.closed else [
+        repairs = None
+        if shells:
+            bar, record = shells[k]
+            props = with_repair_bar(props, _times(bar, rho))
+            repairs = {"shell": record}
+        notes = [] if solid.closed or shells else [
             "open shell integrated as if closed (--allow-open): the volume depends on where "
             "the origin is and is not a property of the part"]
         if integral.valid is False:
@@ -158,7 +182,7 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
         placement[:3, 3] *= cad.scale
         results.append(SolidResult(solid, placement, integral, props,
                                    _integration(integral, props),
-                                   _input(integral, props, cad), tuple(notes)))
+                                   _input(integral, props, cad), tuple(notes), repairs))
     total = _total(results) if len(results) > 1 else None
     return CadInspection(cad, tuple(results), total, tuple(warnings))
 
@@ -255,8 +279,15 @@ def _total(results: list[SolidResult]
     volume = float(sum(r.properties.volume for r in results))
 
     props = MassProperties(volume, total, total / volume, com, inertia, moments, axes,
-                           ErrorBars(rounding))
+                           ErrorBars(rounding, None,
+                                     summed(lambda r: r.properties.uncertainty.repair)))
     return props, summed(lambda r: r.integration), summed(lambda r: r.input)
+
+
+def _times(bar: Uncertainty, rho: float) -> Uncertainty:
+    """A per-unit-density bar at density ``rho``."""
+    return Uncertainty(bar.volume, rho * bar.mass, bar.center_of_mass, rho * bar.inertia,
+                       rho * bar.principal_moments)
 
 
 def local_inertial(result: SolidResult) -> tuple[np.ndarray, np.ndarray]:

@@ -9,33 +9,29 @@ the COM) and converted to SI only now: scaling far-away coordinates first would 
 
 Faces that are all analytic (plane, cylinder, cone, sphere, torus) are integrated by the fixed
 Gauss rules, exact to round-off: ``integration`` is None. With any free-form face (B-spline,
-Bezier, revolution, extrusion, offset, other), the adaptive rule runs at the nested tolerances
-``CAD_ADAPTIVE_EPS``; the last result is reported and the bar is ``CAD_INTEGRATION_SAFETY``
-times its difference from the level before (OpenCASCADE's own estimate is not trusted).
+Bezier, revolution, extrusion, offset, other), see `massprops.cad.freeform`: B-spline and
+Bezier faces whose domain is their parameter rectangle by our own Gauss-Legendre rule per knot
+span (to round-off), the rest by OpenCASCADE's adaptive rule at nested tolerances, each with a
+bar from two levels (OpenCASCADE's own estimate is not trusted).
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
+from massprops.cad.faces import ANALYTIC_FACES, face_census
+from massprops.cad.freeform import integrate_free_form, occ_levels
 from massprops.errors import DegenerateMeshError
 from massprops.mesh.facesums import U
 from massprops.mesh.integral import UnitMoments
-from massprops.tolerances import (
-    CAD_ADAPTIVE_EPS,
-    CAD_ADAPTIVE_FALLBACK_EPS,
-    CAD_INTEGRATION_SAFETY,
-    CAD_ROUNDING_ULPS,
-    MIN_VOLUME_TO_ERROR,
-)
+from massprops.tolerances import CAD_ROUNDING_ULPS, MIN_VOLUME_TO_ERROR
 
-__all__ = ["ANALYTIC_FACES", "SolidIntegral", "integrate_solid"]
-
-ANALYTIC_FACES = ("plane", "cylinder", "cone", "sphere", "torus")
-"""Face types whose Gauss integration is exact to round-off."""
+__all__ = ["ANALYTIC_FACES", "SolidIntegral", "face_types", "integrate_solid", "localise"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,11 +40,11 @@ class SolidIntegral:
     origin m, inertia m⁵ about the COM (file axes), with rounding bounds. integration : None
     (all faces analytic) or (volume m³, com (3,) m, inertia (3, 3) m⁵) bounds of the
     quadrature's remaining error. tolerance : the largest modelling tolerance of its faces,
-    edges and vertices, m. area : m². reach : (3,) m, the bounding box's half extents.
-    faces : {type: count}. valid : OpenCASCADE's BRepCheck verdict for solids with free-form
-    faces (None: not checked; for analytic solids the check would cost more than the
-    integral). An invalid shape (seen: a torus converted to NURBS 1e11 sizes from the origin)
-    can integrate to anything, and the nested levels may agree on it."""
+    edges and vertices, m. area : m², an upper bound (see `massprops.cad.faces`). reach : (3,)
+    m, the bounding box's half extents. faces : {type: count}. valid : OpenCASCADE's BRepCheck
+    verdict for solids with free-form faces (None: not checked; for analytic solids the check
+    would cost more than the integral). An invalid shape (seen: a torus converted to NURBS 1e11
+    sizes from the origin) can integrate to anything, and the nested levels may agree on it."""
 
     origin: np.ndarray
     moments: UnitMoments
@@ -58,150 +54,106 @@ class SolidIntegral:
     reach: np.ndarray
     faces: dict[str, int]
     valid: bool | None = None
+    method: str = "gauss"
 
 
 def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = True
                     ) -> SolidIntegral:
     """Integrate one solid (an OCP TopoDS_Shape in the file unit; ``scale`` metres per unit).
     Raises DegenerateMeshError when it encloses no resolvable volume or is inside out."""
-    # optional extra: OCP is imported only once a CAD file is read
-    from OCP.Bnd import Bnd_Box
-    from OCP.BRepBndLib import BRepBndLib
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
-    from OCP.BRepGProp import BRepGProp
-    from OCP.gp import gp_Trsf, gp_Vec
-    from OCP.GProp import GProp_GProps
-    from OCP.TopLoc import TopLoc_Location
+    k = _occ()
+    local, origin, centre, half = localise(shape)
+    reach = np.array(half)
 
-    box = Bnd_Box()
-    BRepBndLib.Add_s(shape, box, False)   # the geometry's box, not padded by tolerances
-    lo, hi = _corner(box.CornerMin()), _corner(box.CornerMax())
-    origin = (lo + hi) / 2
-    reach = (hi - lo) / 2
-    if np.max(np.abs(origin)) <= np.max(reach):
-        # the world origin is already within the part's own size of it: integrating there
-        # loses at most a few ulps more, and the copy would cost as much as the integral
-        origin = np.zeros(3)
-        local = shape
-    else:
-        trsf = gp_Trsf()
-        trsf.SetTranslation(gp_Vec(*(-origin)))
-        # the placement goes INTO the geometry with the shift: left as a location, BRepGProp
-        # would add it back to every point of geometry shifted by -origin (a far part: 20 %
-        # wrong)
-        placement = shape.Location()
-        if not placement.IsIdentity():
-            trsf = trsf.Multiplied(placement.Transformation())
-            shape = shape.Located(TopLoc_Location())
-        local = BRepBuilderAPI_Transform(shape, trsf, True).Shape()
-
-    faces, tolerance = _faces_and_tolerance(local)
-    free_form = any(kind not in ANALYTIC_FACES for kind in faces)
-    surface = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(local, surface)
-    area = surface.Mass()
-
-    levels = []
-    if not free_form:
-        props = GProp_GProps()
-        BRepGProp.VolumeProperties_s(local, props, only_closed)
-        levels.append(_values(props))
-    else:
-        for eps in CAD_ADAPTIVE_EPS:
-            props = GProp_GProps()
-            BRepGProp.VolumeProperties_s(local, props, eps, only_closed)
-            levels.append(_values(props))
-        if levels[-1][0] == levels[-2][0]:
-            props = GProp_GProps()
-            BRepGProp.VolumeProperties_s(local, props, CAD_ADAPTIVE_FALLBACK_EPS, only_closed)
-            levels.insert(0, _values(props))
-    volume, com, inertia = levels[-1]
+    faces, area, free = face_census(local, free_area=False)
+    tolerance = float(k.ShapeTolerance().Tolerance(local, 1, k.SHAPE))  # 1: the largest
+    free_form = bool(free)
 
     n = sum(faces.values())
-    k = CAD_ROUNDING_ULPS * max(n, 1) * U
-    box_volume = float(np.prod(2 * reach))
-    volume_err = k * box_volume
+    box_volume = 8 * half[0] * half[1] * half[2]
+    integration, method = None, "gauss"
+    if not free_form:
+        volume, com, inertia = occ_levels(local, only_closed, True)[0]
+    else:
+        (volume, com, inertia), integration, method, free_area = integrate_free_form(
+            local, only_closed, box_volume,
+            centre if not origin.any() else (0.0, 0.0, 0.0))
+        area += free_area
+
+    ulps = CAD_ROUNDING_ULPS * max(n, 1) * U
+    volume_err = ulps * box_volume
     if volume == 0 or abs(volume) < MIN_VOLUME_TO_ERROR * volume_err:
         raise DegenerateMeshError(f"{name}: encloses no volume we can resolve ({volume:.3g} "
                                   "file units³); check that it is a solid, not a sheet")
     if volume < 0:
         raise DegenerateMeshError(f"{name}: is inside out (volume {volume:.6g}); reverse the "
                                   "solid's orientation in the CAD tool")
-    com_err = k * box_volume / volume * reach + 2 * U * np.abs(com)
-    inertia_err = np.full((3, 3), k * box_volume * float(reach @ reach))
+    com_err = ulps * box_volume / volume * reach + 2 * U * np.abs(com)
+    inertia_err = np.full((3, 3), ulps * box_volume * (half[0]**2 + half[1]**2 + half[2]**2))
 
-    integration, valid = None, None
+    valid = None
     if free_form:
-        integration = _integration_bar(levels)
-        from OCP.BRepCheck import BRepCheck_Analyzer  # optional extra
-
-        valid = bool(BRepCheck_Analyzer(local).IsValid())
+        valid = bool(k.BRepCheck_Analyzer(local).IsValid())
     s = scale
     moments = UnitMoments(volume * s**3, volume_err * s**3, com * s, com_err * s,
                           inertia * s**5, inertia_err * s**5)
     if integration is not None:
         integration = (integration[0] * s**3, integration[1] * s, integration[2] * s**5)
     return SolidIntegral(origin * s, moments, integration, tolerance * s, area * s * s,
-                         reach * s, faces, valid)
+                         reach * s, faces, valid, method)
 
 
-def _integration_bar(levels: list) -> tuple[float, np.ndarray, np.ndarray]:
-    """CAD_INTEGRATION_SAFETY x the last difference between nested levels; a last difference
-    of exactly zero (both at the rule's floor) falls back on the one before."""
-    bars = []
-    for (v0, c0, j0), (v1, c1, j1) in zip(levels[:-1], levels[1:]):
-        bars.append((abs(v1 - v0), np.abs(c1 - c0), np.abs(j1 - j0)))
-    volume, com, inertia = bars[-1]
-    if volume == 0 and len(bars) > 1:
-        volume, com, inertia = bars[-2]
-    f = CAD_INTEGRATION_SAFETY
-    # the results themselves carry round-off: a bar never below a few ulps of the value
-    v_last, c_last, j_last = levels[-1]
-    return (f * volume + 4 * U * abs(v_last), f * com + 4 * U * np.abs(c_last),
-            f * inertia + 4 * U * np.abs(j_last))
-
-
-def _values(props: Any) -> tuple[float, np.ndarray, np.ndarray]:
-    """(volume, COM, inertia about the COM) of a GProp_GProps, unit density, file unit."""
-    c = props.CentreOfMass()
-    m = props.MatrixOfInertia()
-    j = np.array([[m.Value(i, k) for k in (1, 2, 3)] for i in (1, 2, 3)])
-    return props.Mass(), np.array([c.X(), c.Y(), c.Z()]), 0.5 * (j + j.T)
-
-
-def _corner(p: Any) -> np.ndarray:
-    return np.array([p.X(), p.Y(), p.Z()])
-
-
-_SURFACE_NAMES = {"GeomAbs_Plane": "plane", "GeomAbs_Cylinder": "cylinder",
-                  "GeomAbs_Cone": "cone", "GeomAbs_Sphere": "sphere", "GeomAbs_Torus": "torus",
-                  "GeomAbs_BezierSurface": "bezier", "GeomAbs_BSplineSurface": "bspline",
-                  "GeomAbs_SurfaceOfRevolution": "revolution",
-                  "GeomAbs_SurfaceOfExtrusion": "extrusion", "GeomAbs_OffsetSurface": "offset"}
+def localise(shape: Any) -> tuple[Any, np.ndarray, tuple, tuple]:
+    """(the shape with its geometry translated so that its bounding box's centre is the origin
+    (the shape itself when the world origin is already within its own size), the origin (3,),
+    the box's centre and half extents), all in the file frame and unit."""
+    k = _occ()
+    box = k.Bnd_Box()
+    k.BRepBndLib.Add_s(shape, box, False)   # the geometry's box, not padded by tolerances
+    # plain floats: numpy's per-call cost on 3-vectors adds up to a tenth of a small part's
+    # integral
+    lo, hi = box.CornerMin(), box.CornerMax()
+    x0, y0, z0, x1, y1, z1 = lo.X(), lo.Y(), lo.Z(), hi.X(), hi.Y(), hi.Z()
+    centre = ((x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2)
+    half = ((x1 - x0) / 2, (y1 - y0) / 2, (z1 - z0) / 2)
+    if max(map(abs, centre)) <= max(half):
+        # the world origin is already within the part's own size of it: integrating there
+        # loses at most a few ulps more, and the copy would cost as much as the integral
+        return shape, np.zeros(3), centre, half
+    trsf = k.gp_Trsf()
+    trsf.SetTranslation(k.gp_Vec(-centre[0], -centre[1], -centre[2]))
+    # the placement goes INTO the geometry with the shift: left as a location, BRepGProp
+    # would add it back to every point of geometry shifted by -origin (a far part: 20 %
+    # wrong)
+    placement = shape.Location()
+    if not placement.IsIdentity():
+        trsf = trsf.Multiplied(placement.Transformation())
+        shape = shape.Located(k.TopLoc_Location())
+    local = k.BRepBuilderAPI_Transform(shape, trsf, True).Shape()
+    return local, np.array(centre), centre, half
 
 
 def face_types(shape: Any) -> dict[str, int]:
     """{surface type: number of faces} of a shape."""
-    return _faces_and_tolerance(shape)[0]
+    return face_census(shape)[0]
 
 
-def _faces_and_tolerance(shape: Any) -> tuple[dict[str, int], float]:
-    """({surface type: count}, the largest face/edge/vertex tolerance) in the file unit."""
-    from OCP.BRepAdaptor import BRepAdaptor_Surface  # optional extra
+@functools.cache
+def _occ() -> SimpleNamespace:
+    """The OpenCASCADE names used here, imported once (optional extra, loaded with the first
+    CAD file; importing them on every call cost ~0.1 ms, a third of a small part's integral)."""
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.BRepCheck import BRepCheck_Analyzer
+    from OCP.gp import gp_Trsf, gp_Vec
     from OCP.ShapeAnalysis import ShapeAnalysis_ShapeTolerance
-    from OCP.TopAbs import TopAbs_FACE, TopAbs_SHAPE
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS
+    from OCP.TopAbs import TopAbs_SHAPE
+    from OCP.TopLoc import TopLoc_Location
 
-    counts: dict[Any, int] = {}
-    explorer = TopExp_Explorer(shape, TopAbs_FACE)
-    while explorer.More():
-        kind = BRepAdaptor_Surface(TopoDS.Face(explorer.Current()), False).GetType()
-        counts[kind] = counts.get(kind, 0) + 1
-        explorer.Next()
-    faces: dict[str, int] = {}
-    for kind, n in counts.items():
-        name = _SURFACE_NAMES.get(kind.name, "other")
-        faces[name] = faces.get(name, 0) + n
-    tolerance = ShapeAnalysis_ShapeTolerance().Tolerance(shape, 1, TopAbs_SHAPE)  # 1: largest
-    return faces, float(tolerance)
+    return SimpleNamespace(Bnd_Box=Bnd_Box, BRepBndLib=BRepBndLib,
+                           BRepBuilderAPI_Transform=BRepBuilderAPI_Transform,
+                           BRepCheck_Analyzer=BRepCheck_Analyzer,
+                           gp_Trsf=gp_Trsf, gp_Vec=gp_Vec,
+                           ShapeTolerance=ShapeAnalysis_ShapeTolerance, SHAPE=TopAbs_SHAPE,
+                           TopLoc_Location=TopLoc_Location)

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from massprops.cad.labels import colour, iges_name, label_name, material
 from massprops.cad.occ import quiet_stdout, require_occ
 from massprops.errors import (
     MeshFileError,
@@ -49,6 +50,8 @@ class CadSolid:
         translation in the file unit.
     closed : False for a shell or face set that bounds no solid.
     colour : (r, g, b) in 0..1 when the file gives one, else None.
+    material : {"name", "density" kg/m³, ...} when the file gives one (`massprops.cad.labels`),
+        else None.
     """
 
     name: str
@@ -57,6 +60,7 @@ class CadSolid:
     placement: np.ndarray
     closed: bool
     colour: tuple[float, float, float] | None = None
+    material: dict | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,7 +128,15 @@ def _read_xcaf(name: str, fmt: str, unit: str | None) -> CadFile:
     from OCP.TDocStd import TDocStd_Document
     from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
-    file_unit, occ_unit = _file_unit(name, fmt)
+    reader = _xcaf_reader(fmt)
+    with quiet_stdout():
+        status = reader.ReadFile(name)
+    if int(status) != 1:   # 1: IFSelect_RetDone
+        raise MeshFormatError(f"{name}: not a readable {fmt.upper()} file (translator status "
+                              f"{status}); check that the file is complete")
+    # the unit from the model just parsed (parsing the file a second time for it cost a
+    # quarter of the whole read on a 2.5 MB part); the translator applies it at Transfer
+    file_unit, occ_unit = _file_unit(name, fmt, reader)
     if unit is not None and unit != file_unit:
         raise UsageError(f"{name}: {setting_ref('unit')} {unit} disagrees with the file's own "
                          f"unit ({file_unit}); drop {setting_ref('unit')} (the file says what its "
@@ -135,23 +147,20 @@ def _read_xcaf(name: str, fmt: str, unit: str | None) -> CadFile:
         doc = TDocStd_Document(TCollection_ExtendedString("massprops"))
         # the document's own length unit, else XCAF rescales to millimetres
         XCAFDoc_DocumentTool.SetLengthUnit_s(doc, UNIT_METRES[file_unit])
-        reader = _xcaf_reader(fmt)
         with quiet_stdout():
-            status = reader.ReadFile(name)
-            done = int(status) == 1 and reader.Transfer(doc)  # 1: IFSelect_RetDone
+            done = reader.Transfer(doc)
         if not done:
-            raise MeshFormatError(f"{name}: not a readable {fmt.upper()} file (translator status "
-                                  f"{status}); check that the file is complete")
+            raise MeshFormatError(f"{name}: not a readable {fmt.upper()} file (the translator "
+                                  "found no shapes to transfer); check that the file is complete")
     finally:
         Interface_Static.SetCVal_s("xstep.cascade.unit", previous)
     tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
-    colours = XCAFDoc_DocumentTool.ColorTool_s(doc.Main())
     roots = TDF_LabelSequence()
     tool.GetFreeShapes(roots)
     solids: list[CadSolid] = []
     counter = [0]
     for i in range(1, roots.Length() + 1):
-        _walk(tool, colours, roots.Value(i), None, "", name, solids, counter)
+        _walk(tool, reader, roots.Value(i), None, "", name, solids, counter)
     return CadFile(name, fmt, file_unit, UNIT_METRES[file_unit], tuple(solids),
                    10 if fmt == "iges" else None)
 
@@ -167,31 +176,24 @@ def _xcaf_reader(fmt: str) -> Any:
         reader = IGESCAFControl_Reader()
     reader.SetNameMode(True)
     reader.SetColorMode(True)
+    if fmt == "step":
+        reader.SetMatMode(True)
     return reader
 
 
-def _file_unit(name: str, fmt: str) -> tuple[str, str]:
-    """(our unit name, the translator's name) of the file's length unit (first one given)."""
+def _file_unit(name: str, fmt: str, reader: Any) -> tuple[str, str]:
+    """(our unit name, the translator's name) of the file's length unit (first one given), from
+    an XCAF reader that has parsed the file."""
     if fmt == "step":
         from OCP.collections import Sequence_TCollection_AsciiString as Names  # optional extra
-        from OCP.STEPControl import STEPControl_Reader
 
-        reader = STEPControl_Reader()
-        if int(reader.ReadFile(name)) != 1:
-            raise MeshFormatError(f"{name}: not a readable STEP file; check that the file is "
-                                  "complete (ISO-10303-21 text)")
         lengths, angles, solid_angles = Names(), Names(), Names()
-        reader.FileUnits(lengths, angles, solid_angles)
+        reader.Reader().FileUnits(lengths, angles, solid_angles)
         found = [lengths.Value(i).ToCString().lower() for i in range(1, lengths.Length() + 1)]
     else:
-        from OCP.IGESControl import IGESControl_Reader  # optional extra
-
-        reader = IGESControl_Reader()
-        if int(reader.ReadFile(name)) != 1:
-            raise MeshFormatError(f"{name}: not a readable IGES file; check that the file is "
-                                  "complete")
-        unit_name = reader.IGESModel().GlobalSection().UnitName()
-        if unit_name is None or reader.IGESModel().NbEntities() == 0:
+        model = reader.IGESModel()
+        unit_name = model.GlobalSection().UnitName()
+        if unit_name is None or model.NbEntities() == 0:
             raise MeshFormatError(f"{name}: not a readable IGES file (no global section or no "
                                   "entities); check that the file is complete")
         found = [unit_name.ToCString().lower()]
@@ -205,27 +207,7 @@ def _file_unit(name: str, fmt: str) -> tuple[str, str]:
                           "millimetres, centimetres, micrometres, inches or feet")
 
 
-def _label_name(label: Any) -> str:
-    from OCP.TDataStd import TDataStd_Name  # optional extra
-
-    attr = TDataStd_Name()
-    if label.FindAttribute(TDataStd_Name.GetID_s(), attr):
-        return attr.Get().ToExtString()
-    return ""
-
-
-def _colour(colours: Any, label: Any) -> tuple[float, float, float] | None:
-    from OCP.Quantity import Quantity_Color  # optional extra
-    from OCP.XCAFDoc import XCAFDoc_ColorTool, XCAFDoc_ColorType
-
-    colour = Quantity_Color()
-    for kind in (XCAFDoc_ColorType.XCAFDoc_ColorSurf, XCAFDoc_ColorType.XCAFDoc_ColorGen):
-        if XCAFDoc_ColorTool.GetColor_s(label, kind, colour):
-            return (colour.Red(), colour.Green(), colour.Blue())
-    return None
-
-
-def _walk(tool: Any, colours: Any, label: Any, location: Any, prefix: str, file: str,
+def _walk(tool: Any, reader: Any, label: Any, location: Any, prefix: str, file: str,
           out: list[CadSolid], counter: list[int]) -> None:
     """Depth first through the assembly: components carry their placement down."""
     from OCP.collections import Sequence_TDF_Label as TDF_LabelSequence  # optional extra
@@ -234,7 +216,7 @@ def _walk(tool: Any, colours: Any, label: Any, location: Any, prefix: str, file:
     from OCP.XCAFDoc import XCAFDoc_ShapeTool
 
     location = TopLoc_Location() if location is None else location
-    name = _label_name(label)
+    name = label_name(label)
     if XCAFDoc_ShapeTool.IsAssembly_s(label):
         components = TDF_LabelSequence()
         XCAFDoc_ShapeTool.GetComponents_s(label, components, False)
@@ -244,18 +226,21 @@ def _walk(tool: Any, colours: Any, label: Any, location: Any, prefix: str, file:
             referred = TDF_Label()
             XCAFDoc_ShapeTool.GetReferredShape_s(component, referred)
             placed = location.Multiplied(XCAFDoc_ShapeTool.GetLocation_s(component))
-            _walk(tool, colours, referred, placed, here, file, out, counter)
+            _walk(tool, reader, referred, placed, here, file, out, counter)
         return
     shape = XCAFDoc_ShapeTool.GetShape_s(label)
     if shape.IsNull():
         return
+    if hasattr(reader, "IGESModel"):
+        name = iges_name(reader, shape)   # not the shape type the translator puts instead
     matrix = _matrix(location)
     placed = shape if location.IsIdentity() else shape.Moved(location)
-    out.extend(_split(placed, prefix, name, matrix, _colour(colours, label), counter))
+    out.extend(_split(placed, prefix, name, matrix, colour(label), counter, material(label)))
 
 
 def _split(shape: Any, prefix: str, name: str, matrix: np.ndarray,
-           colour: tuple[float, float, float] | None, counter: list[int]) -> list[CadSolid]:
+           rgb: tuple[float, float, float] | None, counter: list[int],
+           carried: dict | None = None) -> list[CadSolid]:
     """The solids of one part, then its shells and faces that belong to no solid (open)."""
     from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID  # optional extra
     from OCP.TopExp import TopExp_Explorer
@@ -276,10 +261,10 @@ def _split(shape: Any, prefix: str, name: str, matrix: np.ndarray,
     out = []
     for k, (piece, is_solid) in enumerate(pieces):
         counter[0] += 1
-        base = name or f"solid{counter[0]}"
-        label = base if len(pieces) == 1 else f"{base}.{k + 1}"
+        label = (f"solid{counter[0]}" if not name else
+                 name if len(pieces) == 1 else f"{name}.{k + 1}")
         closed = is_solid and _closed(piece)
-        out.append(CadSolid(label, prefix + label, piece, matrix, closed, colour))
+        out.append(CadSolid(label, prefix + label, piece, matrix, closed, rgb, carried))
     return out
 
 

@@ -24,10 +24,11 @@ def inspect_cad_files(ctx: click.Context, paths: tuple[str, ...], out_format: st
     unit = options.get("unit")
     if ctx.get_parameter_source("unit") is click.core.ParameterSource.DEFAULT:
         unit = None  # the file's own unit (BREP: metres)
-    if options.get("repairs") is not None:
-        raise click.UsageError("--fill-holes, --union and --shell apply to meshes, not to CAD "
-                               "files; for a surface as a wall, tessellate it first: massprops "
-                               "align IN.step OUT.stl, then inspect OUT.stl --shell T")
+    repairs = options.get("repairs")
+    if repairs is not None and (repairs.union or repairs.fill_holes):
+        raise click.UsageError("--fill-holes and --union apply to meshes, not to CAD files "
+                               "(their solids are closed by construction); --shell T applies "
+                               "to both")
     if out_format == "csv":
         raise click.UsageError("--format csv is for meshes; use --json for CAD files")
     worst = 0
@@ -49,9 +50,11 @@ def _inspect_one(ctx: click.Context, path: str, out_format: str, principal: bool
         from massprops.cad.inspect import inspect_cad, load_density_map
 
         mapping = None if density_map is None else load_density_map(density_map)
+        repairs = options.get("repairs")
         result = inspect_cad(path, density=options.get("density"), mass=options.get("mass"),
                              unit=unit, density_map=mapping,
-                             allow_open=options.get("allow_open", False))
+                             allow_open=options.get("allow_open", False),
+                             shell=None if repairs is None else repairs.shell)
         try:
             _show(result, out_format, principal)
         except BrokenPipeError as exc:
@@ -96,7 +99,12 @@ def _table(d: dict) -> None:
     if "cad" in d:
         faces = ", ".join(f"{k} {v}" for k, v in d["cad"]["faces"].items())
         click.echo(f"  faces             {faces}; tolerance {d['cad']['tolerance']:.3g} m")
-    for kind in ("rounding", "integration", "input"):
+        material = d["cad"].get("material")
+        if material is not None:
+            density = material.get("density")
+            click.echo(f"  material          {material['name']}" + (
+                "" if density is None else f" ({density:.6g} kg/m³ in the file; not applied)"))
+    for kind in ("rounding", "integration", "input", "repair"):
         bar = bars.get(kind)
         if bar is not None:
             click.echo(f"  ± {kind:<15} volume {bar['volume']:.2g} m³, mass {bar['mass']:.2g} kg")
@@ -114,9 +122,13 @@ def align_cad_file(ctx: click.Context, input_path: str, output_path: str, force:
         from massprops.cad.inspect import inspect_cad
         from massprops.cad.write import align_cad
 
+        repairs = options.get("repairs")
+        if repairs is not None and (repairs.union or repairs.fill_holes):
+            raise click.UsageError("--fill-holes and --union apply to meshes, not to CAD files")
         result = inspect_cad(input_path, density=options.get("density"),
                              mass=options.get("mass"), unit=unit,
-                             allow_open=options.get("allow_open", False))
+                             allow_open=options.get("allow_open", False),
+                             shell=None if repairs is None else repairs.shell)
         for record in result.as_dicts():
             for w in record["warnings"]:
                 say_warning(f"{record['file']}: {record['path'] or record['solid']}", w)
