@@ -249,7 +249,8 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     sampling = every or scene.output.every
     if sampling is None and (out or plot_path):
         sampling = scene.time.duration / 1000
-    result = simulate_system(scene, integrator=integrator, rtol=rtol, every=sampling)
+    result = simulate_system(scene, integrator=integrator, rtol=rtol, every=sampling,
+                             notice=say_note)
     for note in result.notes:
         click.echo(f"massprops: warning: {note}", err=True)
     if out:

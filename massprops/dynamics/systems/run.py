@@ -17,6 +17,8 @@ import numpy as np
 
 from massprops import tolerances
 from massprops.dynamics.accuracy import ADAPTIVE_TIGHTENING
+from massprops.dynamics.compiled.compiling import SYSTEMS
+from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates
 from massprops.dynamics.systems.integrate import integrate
 from massprops.dynamics.systems.model import SystemScene
@@ -128,8 +130,10 @@ def _windows(scene: SystemScene) -> np.ndarray:
 
 def simulate_system(scene: SystemScene, *, integrator: str | None = None,
                     rtol: float | None = None, every: float | None = None,
-                    estimate: bool = True) -> SystemResult:
-    """Run ``scene``; ComputationError (exit 3) at a singular pose or a failed step."""
+                    estimate: bool = True, notice=None) -> SystemResult:
+    """Run ``scene``; ComputationError (exit 3) at a singular pose or a failed step.
+    ``notice(text)``: told once if the step loop's kernel has to be compiled (see
+    `compiled.compiling.prepare`)."""
     # deferred: dynamics.simulate brings the one-body run's modules (the output-time rule is
     # shared, the rest is not needed here)
     from massprops.dynamics.simulate import sample_times
@@ -140,6 +144,7 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
                          "system runs with auto or dop853 (its own DOP853 with projection)")
     rtol = float(rtol if rtol is not None else scene.time.rtol)
     system, y0, notes = prepare(scene)
+    prepare_kernels([SYSTEMS], notice)  # compiled or loaded before the timed run
     duration = scene.time.duration
     t_out = sample_times(duration, every if every is not None else scene.output.every,
                          scene.source)
