@@ -89,3 +89,16 @@ def test_compiled_right_hand_side_and_projection_equal_numpy(scene):
                 assert np.abs(got_y - want_y).max() <= 1e-11
                 assert moved[0] == pytest.approx(dq, rel=1e-6, abs=1e-13)
                 assert moved[1] == pytest.approx(du, rel=1e-6, abs=1e-13)
+
+
+def test_max_steps_bounds_a_system_run():
+    """max_steps (the CLI's --max-steps) stops a system run like a one-body run: RunBudgetError
+    (exit 3) naming the bound, where the step count reached it."""
+    from massprops.dynamics.systems.run import simulate_system
+    from massprops.errors import RunBudgetError, settings_in
+
+    scene = load_system(SAMPLES / "four_bar.yaml")
+    with pytest.raises(RunBudgetError) as info:
+        simulate_system(scene, rtol=1e-10, max_steps=5, estimate=False)
+    assert "took 5 steps" in str(info.value) and "max_steps" in settings_in(info.value.args[0])
+    assert simulate_system(scene, rtol=1e-6, max_steps=10_000, estimate=False).steps < 10_000

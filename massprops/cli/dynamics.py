@@ -106,7 +106,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             require_matplotlib()
         if _is_system(scene_path):  # a `bodies:` scene: the systems package runs it
             _simulate_system(scene_path, as_json, output_path, integrator, rtol, every, force,
-                             plot_path)
+                             plot_path, max_steps)
             return
         scene = load_scene(scene_path)
         for w in scene.warnings:
@@ -236,7 +236,8 @@ def _is_system(scene_path: str) -> bool:
 
 def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
                      integrator: str | None, rtol: float | None, every: float | None,
-                     force: bool, plot_path: str | None = None) -> None:
+                     force: bool, plot_path: str | None = None,
+                     max_steps: int | None = None) -> None:
     """A system scene: run, write the trajectory, print JSON or a short summary."""
     # deferred, as the one-body path's imports: only a system scene needs them
     from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
@@ -250,7 +251,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     if sampling is None and (out or plot_path):
         sampling = scene.time.duration / 1000
     result = simulate_system(scene, integrator=integrator, rtol=rtol, every=sampling,
-                             notice=say_note)
+                             notice=say_note, max_steps=max_steps)
     for note in result.notes:
         click.echo(f"massprops: warning: {note}", err=True)
     if out:

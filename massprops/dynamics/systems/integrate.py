@@ -20,6 +20,7 @@ import numpy as np
 from massprops.dynamics.compiled import systems_step as codes
 from massprops.dynamics.compiled.systems_dop853 import PROJECT_ITERATIONS, run_segment
 from massprops.dynamics.systems.system import SingularPose
+from massprops.errors import RunBudgetError, setting_ref
 
 MAX_STEPS = 2_000_000
 
@@ -78,7 +79,9 @@ def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray,
     if status == codes.UNDERFLOW:
         return ArithmeticError(f"step size underflow at t = {t:.6g} s")
     if status == codes.STEP_LIMIT:
-        return ArithmeticError(f"step limit {max_steps} reached at t = {t:.6g} s")
+        return RunBudgetError(f"{system.scene.source}: the run took {max_steps} steps by "
+                              f"t = {t:.6g} s, the run bound ({setting_ref('max_steps')}); "
+                              f"raise it or loosen {setting_ref('rtol')}")
     if status == codes.LINALG:
         return np.linalg.LinAlgError("Matrix is not positive definite")
     if status == codes.CROSSED:
