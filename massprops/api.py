@@ -84,17 +84,26 @@ def inspect_many(paths: Iterable, *, jobs: int | None = None, executor: Any = No
 
 def load_scene(path: PathLike) -> Scene | SystemScene:
     """Read and validate a scene file (YAML; the keys of docs/interface.md): a `Scene`, or for
-    a scene with ``bodies:`` (a system, docs/systems.md) a `SystemScene`."""
+    a scene with ``bodies:`` or ``model:`` (a system, docs/systems.md) a `SystemScene`; a robot
+    description (``.urdf``, ``.sdf``, ``.xml``) gives the scene ``massprops simulate ROBOT``
+    runs (its stated inertials and base, gravity, 1 s from the zero pose at rest)."""
     # deferred: start-up
     from massprops.dynamics.scene import load_scene as load
-    from massprops.dynamics.systems.scene import is_system_text, load_system
+    from massprops.dynamics.systems.robot_scene import (
+        description_scene,
+        is_description,
+        load_any_system,
+    )
+    from massprops.dynamics.systems.scene import is_system_text
 
+    if is_description(path):
+        return description_scene(path)
     try:
         with open(path, encoding="utf-8-sig") as handle:
             system = is_system_text(handle.read())
     except (OSError, UnicodeDecodeError):  # the reader below says what is wrong, in one line
         system = False
-    return load_system(path) if system else load(path)
+    return load_any_system(path) if system else load(path)
 
 
 def simulate(scene: Scene | SystemScene | PathLike,
@@ -103,7 +112,7 @@ def simulate(scene: Scene | SystemScene | PathLike,
     `SimulationResult` (``final``, ``diagnostics``, ``trajectory``; ``as_dict()`` is the
     ``simulate --json`` object). ``options``: integrator, rtol, step, every, max_steps. A
     system (a `SystemScene`) gives a `SystemResult` (the same keys, per body and joint);
-    its ``options``: integrator, rtol, every."""
+    its ``options``: integrator, rtol, every, max_steps."""
     # deferred: start-up
     from massprops.dynamics.simulate import simulate as run
     from massprops.dynamics.systems.model import SystemScene

@@ -169,7 +169,7 @@ def test_plot_draws_planar_and_spatial_mechanisms(tmp_path):
 
 
 def test_singular_pose_is_reported_not_run_through():
-    """A parallelogram four-bar goes flat (all four joints on a line) after turning 120°: the
+    """A parallelogram four-bar goes flat (all four joints on a line) after turning 60°: the
     loop's constraints lose rank there, and the run stops saying so, naming the cut joint and
     the time, instead of choosing a branch silently (or returning NaN)."""
     import pytest
@@ -195,6 +195,8 @@ time: {{duration: 2.0}}
         _system(text, every=0.1, rtol=1e-9)
     message = str(info.value)
     assert "singular pose" in message and "joint(s) C" in message and "\n" not in message
-    t_flat = (np.pi - np.pi / 3) / 2.0  # the crank turns at a constant 2 rad/s (no loads)
+    # the crank turns at a constant 2 rad/s (no loads), right-handed about +y: B = (0.5, 0, h)
+    # reaches the x axis, every joint on one line, after 60° (the next flat pose is at 240°)
+    t_flat = (np.pi / 3) / 2.0
     low, high = (float(x) for x in message.split("between t = ")[1].split(" s")[0].split(" and "))
     assert low <= t_flat <= high

@@ -110,7 +110,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             require_matplotlib()
         if _is_system(scene_path):  # `bodies:`, `model:` or a description: the systems package
             _simulate_system(scene_path, as_json, output_path, integrator, rtol, every, force,
-                             plot_path, duration)
+                             plot_path, duration, max_steps)
             return
         scene = load_scene(scene_path)
         if duration is not None:
@@ -260,7 +260,7 @@ def _is_system(scene_path: str) -> bool:
 def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
                      integrator: str | None, rtol: float | None, every: float | None,
                      force: bool, plot_path: str | None = None,
-                     duration: float | None = None) -> None:
+                     duration: float | None = None, max_steps: int | None = None) -> None:
     """A system scene or a robot description: run, write the trajectory, print JSON or a short
     summary."""
     # deferred, as the one-body path's imports: only a system scene needs them
@@ -284,7 +284,8 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     sampling = every or scene.output.every
     if sampling is None and (out or plot_path):
         sampling = scene.time.duration / 1000
-    result = simulate_system(scene, integrator=integrator, rtol=rtol, every=sampling)
+    result = simulate_system(scene, integrator=integrator, rtol=rtol, every=sampling,
+                             notice=say_note, max_steps=max_steps)
     for note in result.notes:
         click.echo(f"massprops: warning: {note}", err=True)
     if out:

@@ -1,7 +1,7 @@
 """Compile every stepping kernel into this package's ``_prebuilt`` folder: setup.py's build step
 (`prebuilt` says how the shipped kernels are used).
 
-    python -m massprops.dynamics.compiled.build [--only rk4,dop853]
+    python -m massprops.dynamics.compiled.build [--only rk4,dop853,systems]
 """
 
 from __future__ import annotations
@@ -26,10 +26,11 @@ from massprops.dynamics.integrators import INTEGRATORS
 
 
 def build(names: list[str] | None = None, jobs: int = 2) -> int:
-    """Compile the kernels of the integrators ``names`` (default: every stepping one) of the
-    package this module is in and store them in `FOLDER`; returns the number of files.
+    """Compile the kernels of the integrators ``names`` (default: every stepping one and the
+    systems' step loop, `compiling.SYSTEMS`) of the package this module is in and store them
+    in `FOLDER`; returns the number of files.
     ``jobs`` processes compile side by side (one kernel is one process's work)."""
-    kernels = compiling.compiled_names(names or list(INTEGRATORS))
+    kernels = compiling.compiled_names(names or [*INTEGRATORS, compiling.SYSTEMS])
     scratch = Path(tempfile.mkdtemp(prefix="massprops-prebuild-"))
     try:
         shares = [kernels[i::jobs] for i in range(jobs)]
@@ -64,7 +65,7 @@ def main(argv: list[str]) -> None:
     if argv[:1] == ["--only"] and len(argv) == 2:
         names = argv[1].split(",")
     elif argv:
-        sys.exit("usage: python -m massprops.dynamics.compiled.build [--only rk4,dop853]")
+        sys.exit("usage: python -m massprops.dynamics.compiled.build [--only rk4,dop853,systems]")
     print(f"massprops: prebuilt {build(names)} kernel cache files into {FOLDER}")
 
 

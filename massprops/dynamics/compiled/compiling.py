@@ -34,10 +34,14 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 COMPILE_SECONDS = {"rk4": 2.0, "dop853": 3.0, "implicit": 8.0, "midpoint": 5.0,
-                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0}
+                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0, "systems": 65.0}
 """About how long (s, one idle core) compiling each method's kernels takes from an empty cache,
 from benchmarks/bench_first_run.py; only for the notice's estimate. The three splitting methods
 share one kernel."""
+
+SYSTEMS = "systems"
+"""The name of the systems' step loop (`systems_dop853`), prepared like an integrator's kernel
+(systems of bodies run only with it)."""
 
 SHARED_KERNEL = {"splitting4": "splitting", "splitting6": "splitting"}
 """Methods whose compiled kernel is another's (compiling one compiles both)."""
@@ -64,7 +68,7 @@ def compiled_names(names: Sequence[str]) -> list[str]:
 
     out: list[str] = []
     for name in names:
-        if INTEGRATORS[name].kind == "exact":
+        if name != SYSTEMS and INTEGRATORS[name].kind == "exact":
             continue
         kernel = SHARED_KERNEL.get(name, name)
         if kernel not in out:
@@ -120,6 +124,12 @@ def prepare(names: Sequence[str], notice: Callable[[str], None] | None = None) -
 def warm_up(name: str) -> None:
     """Run integrator ``name`` for one tiny step on a stand-in problem whose arguments have the
     types of every real run (so the call loads or compiles the very kernel the runs use)."""
+    if name == SYSTEMS:
+        # deferred: the systems' kernels, needed only when preparing them
+        from massprops.dynamics.compiled.systems_dop853 import warm_up as warm_up_systems
+
+        warm_up_systems()
+        return
     # deferred: the registry imports the kernels' modules; needed only when preparing them
     from massprops.dynamics.forces import GRAVITY, NPAR
     from massprops.dynamics.integrators import INTEGRATORS

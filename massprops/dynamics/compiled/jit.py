@@ -64,6 +64,16 @@ released once, around the whole compiled call)."""
 COMPILED_OPTIONS = {"error_model": "numpy"}
 """Options of the plain-Python functions compiled where called (see the module doc)."""
 
+array_jit = _cached_njit(**COMPILED_OPTIONS)
+"""Decorator: like `jit`, with numpy's error model (x / 0.0 is inf or NaN, as in numpy): the
+systems' plain array functions (`compiled.systems_*`), written to give numpy's numbers."""
+
+array_inner = _cached_njit(no_cpython_wrapper=True, no_cfunc_wrapper=True, **COMPILED_OPTIONS)
+"""Decorator: like `inner`, with numpy's error model."""
+
+array_kernel = _cached_njit(nogil=True, **COMPILED_OPTIONS)
+"""Decorator: like `kernel`, with numpy's error model (the systems' step loop)."""
+
 
 def _register() -> None:
     for fn in (forces.quat_matrix, forces.force_torque, forces.rhs, *_elementwise.FUNCTIONS):
@@ -112,5 +122,5 @@ def start_numba_lean() -> None:
                 del sys.modules[name]
 
 
-__all__ = ["COMPILED_OPTIONS", "LEAN_SKIPPED", "inlined", "inlined_jit", "inner", "jit", "kernel",
-           "start_numba_lean"]
+__all__ = ["COMPILED_OPTIONS", "LEAN_SKIPPED", "array_inner", "array_jit", "array_kernel",
+           "inlined", "inlined_jit", "inner", "jit", "kernel", "start_numba_lean"]

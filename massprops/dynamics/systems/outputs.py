@@ -38,6 +38,21 @@ class Samples:
     joint_points: np.ndarray | None = None  # (n, J, 3) each joint's point on its second body
 
 
+def body_states(system, y: np.ndarray):
+    """(position, orientation, velocity, angular velocity) of every body at the states ``y``
+    (n, nq + nv): kinematics only, no accelerations or reactions (for comparing runs)."""
+    tree = system.tree
+    n, nb = len(y), len(tree.bodies)
+    pos, quat = np.empty((n, nb, 3)), np.empty((n, nb, 4))
+    vel, omega = np.empty((n, nb, 3)), np.empty((n, nb, 3))
+    for s in range(n):
+        kin = tr.kinematics(tree, y[s, :system.nq], y[s, system.nq:])
+        pos[s], vel[s] = kin.com, kin.V[:, 3:] + np.cross(kin.V[:, :3], kin.com)
+        omega[s] = kin.V[:, :3]
+        quat[s] = canonical(matrix_to_quat(kin.rotation))
+    return pos, quat, vel, omega
+
+
 def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples:
     """Samples of the states ``y`` (n, nq + nv) at times ``t``."""
     scene, tree = system.scene, system.tree
@@ -89,7 +104,7 @@ def _nrate(kind: str) -> int:
 
 def _at_point(f: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A spatial force (n_O, f) as (force, torque about p)."""
-    return f[3:], f[:3] - np.cross(p, f[3:])
+    return f[3:], f[:3] - tr.cross(p, f[3:])
 
 
 def _reactions(system, t: float, y: np.ndarray, sol, force: np.ndarray, torque: np.ndarray):
@@ -124,7 +139,7 @@ def _reactions(system, t: float, y: np.ndarray, sol, force: np.ndarray, torque: 
                 f[:3] -= tau[j.iu] * w
             else:
                 p = kin.point[n]
-                f[:3] -= tau[j.iu] * np.cross(p, w)
+                f[:3] -= tau[j.iu] * tr.cross(p, w)
                 f[3:] -= tau[j.iu] * w
         if j.reversed:
             f = -f
@@ -192,9 +207,9 @@ def _from_poses(tree, kin, sj):
     xb = _world_point(tree, kin, sj.b, sj.point)
     e = ea @ axis
     shift = (xb - xa) @ e
-    va = np.zeros(3) if sj.a == WORLD else kin.V[sj.a, 3:] + np.cross(kin.V[sj.a, :3], xa)
-    vb = kin.V[sj.b, 3:] + np.cross(kin.V[sj.b, :3], xb)
-    shift_rate = (vb - va) @ e + (xb - xa) @ np.cross(_omega(kin, sj.a), e)
+    va = np.zeros(3) if sj.a == WORLD else kin.V[sj.a, 3:] + tr.cross(kin.V[sj.a, :3], xa)
+    vb = kin.V[sj.b, 3:] + tr.cross(kin.V[sj.b, :3], xb)
+    shift_rate = (vb - va) @ e + (xb - xa) @ tr.cross(_omega(kin, sj.a), e)
     if sj.kind == "revolute":
         return np.array([turn]), np.array([w_rel @ axis])
     if sj.kind == "prismatic":
@@ -204,7 +219,7 @@ def _from_poses(tree, kin, sj):
 
 def _perp(axis: np.ndarray) -> np.ndarray:
     helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
-    v = np.cross(axis, helper)
+    v = tr.cross(axis, helper)
     return v / np.linalg.norm(v)
 
 
@@ -213,4 +228,4 @@ def _angle_about(axis: np.ndarray, start: np.ndarray, end: np.ndarray) -> float:
     normal to the axis."""
     s = start - (start @ axis) * axis
     e = end - (end @ axis) * axis
-    return float(np.arctan2(axis @ np.cross(s, e), s @ e))
+    return float(np.arctan2(axis @ tr.cross(s, e), s @ e))

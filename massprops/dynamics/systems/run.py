@@ -17,12 +17,14 @@ import numpy as np
 
 from massprops import tolerances
 from massprops.dynamics.accuracy import ADAPTIVE_TIGHTENING
+from massprops.dynamics.compiled.compiling import SYSTEMS
+from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates
-from massprops.dynamics.systems.integrate import integrate
+from massprops.dynamics.systems.integrate import MAX_STEPS, integrate
 from massprops.dynamics.systems.model import SystemScene
-from massprops.dynamics.systems.outputs import Samples, evaluate
+from massprops.dynamics.systems.outputs import Samples, body_states, evaluate
 from massprops.dynamics.systems.system import System
-from massprops.errors import ComputationError, SceneError, UsageError
+from massprops.errors import ComputationError, RunBudgetError, SceneError, UsageError
 from massprops.rotation import quat_to_matrix, rotation_angle_between
 
 SYSTEM_INTEGRATORS = ("auto", "dop853")
@@ -131,8 +133,12 @@ def _windows(scene: SystemScene) -> np.ndarray:
 
 def simulate_system(scene: SystemScene, *, integrator: str | None = None,
                     rtol: float | None = None, every: float | None = None,
-                    estimate: bool = True) -> SystemResult:
-    """Run ``scene``; ComputationError (exit 3) at a singular pose or a failed step."""
+                    estimate: bool = True, notice=None,
+                    max_steps: int | None = None) -> SystemResult:
+    """Run ``scene``; ComputationError (exit 3) at a singular pose or a failed step,
+    RunBudgetError once a run takes ``max_steps`` steps (default: integrate.MAX_STEPS).
+    ``notice(text)``: told once if the step loop's kernel has to be compiled (see
+    `compiled.compiling.prepare`)."""
     # deferred: dynamics.simulate brings the one-body run's modules (the output-time rule is
     # shared, the rest is not needed here)
     from massprops.dynamics.simulate import sample_times
@@ -143,6 +149,7 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
                          "system runs with auto or dop853 (its own DOP853 with projection)")
     rtol = float(rtol if rtol is not None else scene.time.rtol)
     system, y0, notes = prepare(scene)
+    prepare_kernels([SYSTEMS], notice)  # compiled or loaded before the timed run
     duration = scene.time.duration
     if duration == 0:  # the start pose only (a description's static torques)
         return _static(system, y0, notes)
@@ -150,8 +157,11 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
                          scene.source)
     floors = _floors(system, duration)
     start = time.perf_counter()
-    run = integrate(system, y0, t_out, rtol, floors, _windows(scene))
+    limit = max_steps or MAX_STEPS
+    run = integrate(system, y0, t_out, rtol, floors, _windows(scene), limit)
     wall = time.perf_counter() - start
+    if isinstance(run.failure, RunBudgetError):
+        raise run.failure
     if run.failure is not None:
         raise ComputationError(str(run.failure).splitlines()[0]) from run.failure
     conservative = system.conservative()
@@ -181,7 +191,7 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
                      "reactions reported are the minimum-norm choice, not unique")
     if estimate:
         other = integrate(system, y0, t_out, rtol / ADAPTIVE_TIGHTENING, floors,
-                          _windows(scene))
+                          _windows(scene), 2 * limit)
         if other.failure is None:
             companion = evaluate_states(system, t_out, other.y_out)
             diagnostics["error_estimate"] = distance(samples, companion, scene.size)
@@ -227,8 +237,10 @@ def _energy_scale(system: System) -> float:
 
 
 def evaluate_states(system: System, t: np.ndarray, y: np.ndarray) -> Samples:
-    """Body states only (no reactions): for comparing runs."""
-    return evaluate(system, t, y, with_energy=False)
+    """Body states only (no joints, reactions or energy): for comparing runs."""
+    pos, quat, vel, omega = body_states(system, y)
+    none = np.zeros((len(t), 0, 3))
+    return Samples(t, pos, quat, vel, omega, [], [], none, none, None)
 
 
 def distance(a: Samples, b: Samples, size: float) -> float:

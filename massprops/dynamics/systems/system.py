@@ -19,6 +19,7 @@ from massprops.dynamics.systems import tree as tr
 from massprops.dynamics.systems.assemble import Tree
 from massprops.dynamics.systems.loops import terms
 from massprops.dynamics.systems.model import WORLD, SystemScene
+from massprops.dynamics.systems.program import build_program
 from massprops.dynamics.systems.tree import cross
 from massprops.errors import ComputationError
 
@@ -57,9 +58,8 @@ class System:
                              for s in scene.springs]
         self.rank: int | None = None  # of G at the start; a drop later is a singular pose
         self.margin = 1.0  # smallest σ_min / σ_max of G M^(-1/2) kept over the run so far
-        self._last: tuple | None = None  # (B, kept left singular vectors) of the last solve
-        self._accepted: tuple | None = None  # the same at the last accepted step
         self.time = 0.0
+        self.program = build_program(self)  # the arrays the compiled step loop runs on
 
     # --- loads ----------------------------------------------------------------------------------
     def applied(self, t: float, kin: tr.Kinematics, q: np.ndarray, u: np.ndarray):
@@ -129,20 +129,19 @@ class System:
             rank = int(keep.sum())
             if check and rank:
                 self.margin = min(self.margin, float(sv[rank - 1] / sv[0]))
-                self._last = (b, uu[:, keep])
             free = np.linalg.solve(chol.T, np.linalg.solve(chol, rhs))
             r = -gdot - g @ free
             coef = uu[:, keep].T @ r / sv[keep] ** 2
             lam = uu[:, keep] @ coef
             rhs = rhs + g.T @ lam
             if check and self.rank is not None and rank < self.rank:
-                raise SingularPose(self._singular_message(t, uu[:, ~keep[:uu.shape[1]]]
+                raise SingularPose(self.singular_message(t, uu[:, ~keep[:uu.shape[1]]]
                                                           if uu.shape[1] else uu))
         udot = np.linalg.solve(chol.T, np.linalg.solve(chol, rhs))
         kin = tr.kinematics(self.tree, q, u, udot) if full else kin0
         return Solution(udot, lam, rank, kin, rho_b, rho_a)
 
-    def _singular_message(self, t: float, directions: np.ndarray,
+    def singular_message(self, t: float, directions: np.ndarray,
                           since: float | None = None) -> str:
         rows = np.abs(directions).max(axis=1) if directions.size else np.zeros(self.m)
         names, r = [], 0
@@ -157,31 +156,6 @@ class System:
                 f"joint(s) {named} lost a constraint direction there (the constraints no "
                 "longer determine the motion beyond it: a change point, a dead point); stop "
                 "before it or change the geometry")
-
-    def accept(self, t_prev: float, t_new: float) -> None:
-        """Called by the integrator once per accepted step, right after the right-hand side at
-        the step's (projected) end: raises SingularPose when a singular pose was crossed inside
-        the step. Across such a pose one of the kept singular values of B = G M^(-1/2) passes
-        through zero and changes sign in the smooth decomposition, so the r×r matrix
-        U_prevᵀ B_new B_prevᵀ U_prev (≈ diag of σ_prev·σ_new) has a determinant of the other
-        sign; a step that only turns the mechanism keeps it positive. Rank checks at the
-        evaluated states alone would miss a crossing between them."""
-        if self._last is None:
-            return
-        if self._accepted is not None:
-            b_prev, u_prev = self._accepted
-            b_new = self._last[0]
-            if b_new.shape == b_prev.shape and np.linalg.det(
-                    u_prev.T @ b_new @ b_prev.T @ u_prev) <= 0.0:
-                raise SingularPose(self._singular_message(
-                    t_new, np.zeros((self.m, 0)), since=t_prev))
-        self._accepted = self._last
-
-    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
-        """ẏ = [q̇, u̇]."""
-        self.time = t
-        sol = self.solve(t, y, full=False)
-        return np.concatenate([tr.qdot(self.tree, y[:self.nq], y[self.nq:]), sol.udot])
 
     # --- projection -----------------------------------------------------------------------------
     def constraint(self, y: np.ndarray):

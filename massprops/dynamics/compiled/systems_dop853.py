@@ -1,0 +1,242 @@
+"""DOP853 over a system's y = [q, u], compiled: the whole step loop of one segment in one call.
+
+The method of `dynamics.systems.integrate` (the project's tableau, dop853.f's error norm and step
+control): after each accepted step the quaternions are renormalised and (q, u) projected onto
+Φ = 0, Φ̇ = 0 (`systems_step.project`), f is evaluated at the projected end (FSAL), the singular
+pose test runs (`systems_step.accept`), and where output times fall inside the step the dense
+output is built from its start and its projected end and each sample projected in turn.
+
+istats: [steps, evaluations, rejected, status, next output index, rank of the last accepted
+step's B (-1: none yet), rank of G at the start (-1: unchecked)]; fstats: [largest position
+correction, largest velocity correction, singularity margin, time of a failure, start of the
+failing step, residual left unclosed]. A failure stops the segment with its status (codes in
+`systems_step`); ``yfail`` then holds the state where it happened.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from massprops.dynamics.compiled.jit import array_inner, array_kernel
+from massprops.dynamics.compiled.systems_step import (
+    CROSSED,
+    OK,
+    STEP_LIMIT,
+    UNDERFLOW,
+    accept,
+    normalize,
+    project,
+    rhs,
+    workspace,
+)
+from massprops.dynamics.compiled.unowned import unowned
+from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, C, D
+
+E3 = B - BHH
+SAFE, FAC_MIN, FAC_MAX = 0.9, 1.0 / 3.0, 6.0
+PROJECT_ITERATIONS = 12
+"""Newton steps of the post-step projection (System.project's default)."""
+
+
+@array_inner
+def _stage(y, h, k, s, out):
+    """out = y + h Σ_{j<s} A[s, j] k[j]."""
+    for i in range(y.size):
+        x = 0.0
+        for j in range(s):
+            x += A[s, j] * k[j, i]
+        out[i] = y[i] + h * x
+
+
+@array_inner
+def _fail(istats, fstats, yfail, status, t, y):
+    istats[3] = status
+    fstats[3] = t
+    for i in range(y.size):
+        yfail[i] = y[i]
+
+
+@array_kernel
+def run_segment(prog, y, t0, t1, rtol, scales, t_out, y_out, istats, fstats, acc_b, acc_u,
+                max_steps, yfail):
+    """Integrate y (in place) from t0 to t1; samples at t_out[istats[4]:] into y_out."""
+    ws = workspace(prog)
+    n = y.size
+    scratch = (np.empty((16, n)), np.empty(n), np.empty(n), np.empty((8, n)), np.zeros(3))
+    arrays = (y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail)
+    _segment(unowned(prog), unowned(ws), unowned(scratch), unowned(arrays), t0, t1, rtol,
+             max_steps, (prog, ws, scratch, arrays))  # the last keeps the owners alive
+
+
+@array_inner
+def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
+    """run_segment's loop, on views numba does not reference-count (`unowned`)."""
+    y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail = arrays
+    k, ytmp, ynew, cont, moved = scratch
+    n = y.size
+    rank0 = istats[6]
+    status = rhs(prog, ws, t0, y, k[0], rank0, fstats)
+    istats[1] += 1
+    if status != OK:
+        _fail(istats, fstats, yfail, status, t0, y)
+        return
+    status = accept(ws, acc_b, acc_u, istats)
+    hmax = t1 - t0
+    # the initial step (Hairer's HINIT)
+    dnf = dny = 0.0
+    for i in range(n):
+        sk = rtol * scales[i]
+        dnf += (k[0, i] / sk) ** 2
+        dny += (y[i] / sk) ** 2
+    h = 1e-6 if (dnf <= 1e-10 or dny <= 1e-10) else 0.01 * math.sqrt(dny / dnf)
+    h = min(h, hmax)
+    for i in range(n):
+        ytmp[i] = y[i] + h * k[0, i]
+    status = rhs(prog, ws, t0 + h, ytmp, k[1], rank0, fstats)
+    istats[1] += 1
+    if status != OK:
+        _fail(istats, fstats, yfail, status, t0 + h, ytmp)
+        return
+    der2 = 0.0
+    for i in range(n):
+        der2 += ((k[1, i] - k[0, i]) / (rtol * scales[i])) ** 2
+    der2 = math.sqrt(der2) / h
+    der12 = max(der2, math.sqrt(dnf))
+    h1 = max(1e-6, h * 1e-3) if der12 <= 1e-15 else (0.01 / der12) ** (1.0 / 8.0)
+    h = min(100.0 * h, h1, hmax)
+    t, rejected = t0, False
+    nout = t_out.size
+    t_last = t0 + h  # the time of the last right-hand side (a projection failure's time)
+    while t < t1:
+        last = t + 1.01 * h >= t1
+        if last:
+            h = t1 - t
+        if h <= 1e-14 * max(abs(t), t1):
+            _fail(istats, fstats, yfail, UNDERFLOW, t, y)
+            return
+        if istats[0] >= max_steps:
+            _fail(istats, fstats, yfail, STEP_LIMIT, t, y)
+            return
+        for s in range(1, 12):
+            _stage(y, h, k, s, ytmp)
+            t_last = t + h * C[s]
+            status = rhs(prog, ws, t_last, ytmp, k[s], rank0, fstats)
+            if status != OK:
+                istats[1] += s
+                _fail(istats, fstats, yfail, status, t_last, ytmp)
+                return
+        istats[1] += 11
+        err5 = err3 = 0.0
+        for i in range(n):
+            xb = xe = x3 = 0.0
+            for j in range(12):
+                xb += B[j] * k[j, i]
+                xe += ER[j] * k[j, i]
+                x3 += E3[j] * k[j, i]
+            ynew[i] = y[i] + h * xb
+            sk = rtol * max(scales[i], abs(ynew[i]))
+            err5 += (xe / sk) ** 2
+            err3 += (x3 / sk) ** 2
+        deno = err5 + 0.01 * err3
+        if deno == 0.0:
+            deno = 1.0
+        err = abs(h) * err5 / math.sqrt(n * deno)
+        if not math.isfinite(err):
+            err = math.inf
+        if err <= 1.0:
+            t_new = t1 if last else t + h
+            status = project(prog, ws, ynew, PROJECT_ITERATIONS, moved)
+            if status != OK:
+                fstats[5] = moved[2]
+                _fail(istats, fstats, yfail, status, t_last, ynew)
+                return
+            normalize(prog, ynew[:prog[0][0]])
+            fstats[0] = max(fstats[0], moved[0])
+            fstats[1] = max(fstats[1], moved[1])
+            t_last = t_new
+            status = rhs(prog, ws, t_new, ynew, k[12], rank0, fstats)
+            istats[1] += 1
+            if status != OK:
+                _fail(istats, fstats, yfail, status, t_new, ynew)
+                return
+            if accept(ws, acc_b, acc_u, istats) == CROSSED:
+                fstats[4] = t
+                _fail(istats, fstats, yfail, CROSSED, t_new, ynew)
+                return
+            kout = istats[4]
+            if kout < nout and t_out[kout] <= t_new:
+                for s in range(13, 16):
+                    _stage(y, h, k, s, ytmp)
+                    t_last = t + h * C[s]
+                    status = rhs(prog, ws, t_last, ytmp, k[s], rank0, fstats)
+                    if status != OK:
+                        _fail(istats, fstats, yfail, status, t_last, ytmp)
+                        return
+                istats[1] += 3
+                _dense(y, ynew, h, k, cont)
+                while kout < nout and t_out[kout] <= t_new:
+                    row = y_out[kout]
+                    _dense_row(cont, (t_out[kout] - t) / h, row)
+                    status = project(prog, ws, row, PROJECT_ITERATIONS, moved)
+                    if status != OK:
+                        fstats[5] = moved[2]
+                        _fail(istats, fstats, yfail, status, t_last, row)
+                        return
+                    kout += 1
+                istats[4] = kout
+            for i in range(n):
+                y[i] = ynew[i]
+                k[0, i] = k[12, i]
+                scales[i] = max(scales[i], abs(y[i]))
+            t = t_new
+            istats[0] += 1
+            fac = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, err ** 0.125 / SAFE))
+            h_next = min(h / fac, t1 - t0)
+            h = min(h_next, h) if rejected else h_next
+            rejected = False
+        else:
+            h = h / min(1.0 / FAC_MIN, err ** 0.125 / SAFE)
+            rejected = True
+            istats[2] += 1
+
+
+@array_inner
+def _dense(y, ynew, h, k, cont):
+    """dop853.f's 7th-order dense-output coefficients of the step from y to ynew."""
+    for i in range(y.size):
+        ydiff = ynew[i] - y[i]
+        bspl = h * k[0, i] - ydiff
+        cont[0, i], cont[1, i], cont[2, i] = y[i], ydiff, bspl
+        cont[3, i] = ydiff - h * k[12, i] - bspl
+        for r in range(4):
+            x = 0.0
+            for j in range(16):
+                x += D[r, j] * k[j, i]
+            cont[4 + r, i] = h * x
+
+
+@array_inner
+def _dense_row(cont, s, out):
+    s1 = 1.0 - s
+    for i in range(out.size):
+        par = cont[4, i] + s * (cont[5, i] + s1 * (cont[6, i] + s * cont[7, i]))
+        out[i] = cont[0, i] + s * (cont[1, i] + s1 * (cont[2, i] + s * (cont[3, i] + s1 * par)))
+
+
+def warm_up() -> None:
+    """Run one short segment of a stand-in system (a rod on a hinge, no loops) whose arrays have
+    the types of every real program, so the call loads or compiles the kernel runs use."""
+    ints = np.int64
+    prog = (np.array([1, 1, 0, 1, 1], ints), np.array([[1, -1, 0, 0, 0, 1, 1, 0]], ints),
+            np.array([[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]]), np.zeros((1, 3)),
+            np.array([[0.0, 0.0, 0.5]]), np.eye(3).reshape(1, 3, 3), np.zeros(1, ints),
+            np.ones(1), np.eye(3).reshape(1, 3, 3), np.eye(3).reshape(1, 3, 3),
+            np.array([[0.0, 0.0, -0.5]]), np.array([[0.0, 0.0, -9.81]]), np.zeros((0, 4), ints),
+            np.zeros((0, 13)), np.zeros((0, 4), ints), np.zeros((0, 8)), np.zeros((0, 2), ints),
+            np.zeros((0, 9)), np.zeros(0, ints), np.zeros((0, 6)), np.array([1.0, 1e-8, 1e-14]))
+    y = np.array([0.1, 0.0])
+    run_segment(prog, y, 0.0, 1e-3, 1e-6, np.ones(2), np.array([0.0, 1e-3]), np.zeros((2, 2)),
+                np.array([0, 0, 0, OK, 1, -1, -1], ints), np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]),
+                np.zeros((0, 1)), np.zeros((0, 1)), 1000, np.zeros(2))

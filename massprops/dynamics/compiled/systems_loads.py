@@ -1,0 +1,100 @@
+"""A system program's applied loads, compiled: gravity, body forces and torques (with their time
+windows), springs between bodies, and the tree joints' springs, dampers and drives, as in
+`dynamics.systems.system.System.applied` (spatial forces about O on each body, world, and
+generalised loads on the joints)."""
+
+from __future__ import annotations
+
+import math
+
+from massprops.dynamics.compiled.jit import array_inner
+from massprops.dynamics.compiled.systems_tree import cross_into
+
+
+@array_inner
+def applied(prog, t, q, u, ws):
+    """fext (n, 6) spatial forces about O on each body and τ (nv,) joint loads (System.applied)."""
+    ji, bweight = prog[1], prog[11]
+    fi, ff, si, sf, li, lf = prog[14], prog[15], prog[16], prog[17], prog[18], prog[19]
+    rot, com, vel, fext, tau = ws[0], ws[1], ws[2], ws[11], ws[12]
+    v3 = ws[9]
+    vec, x, xa, xb = v3[0], v3[1], v3[2], v3[3]
+    va, vb, dd, force = v3[4], v3[5], v3[6], v3[7]
+    for i in range(com.shape[0]):
+        cross_into(x, com[i], bweight[i])
+        for j in range(3):
+            fext[i, j] = x[j]
+            fext[i, 3 + j] = bweight[i, j]
+    for f in range(fi.shape[0]):
+        if not ff[f, 6] <= t < ff[f, 7]:
+            continue
+        b = fi[f, 1]
+        for i in range(3):
+            vec[i] = ff[f, i]
+            if fi[f, 2]:  # body frame
+                vec[i] = rot[b, i, 0] * ff[f, 0] + rot[b, i, 1] * ff[f, 1] + rot[b, i, 2] * ff[f, 2]
+        if fi[f, 0] == 1:  # a torque
+            for i in range(3):
+                fext[b, i] += vec[i]
+            continue
+        for i in range(3):
+            x[i] = com[b, i]
+            if fi[f, 3]:  # applied at a point
+                x[i] += rot[b, i, 0] * ff[f, 3] + rot[b, i, 1] * ff[f, 4] + rot[b, i, 2] * ff[f, 5]
+        cross_into(xa, x, vec)
+        for i in range(3):
+            fext[b, i] += xa[i]
+            fext[b, 3 + i] += vec[i]
+    for n in range(si.shape[0]):
+        _point_state(rot, com, vel, si[n, 0], sf[n, 0:3], xa, va)
+        _point_state(rot, com, vel, si[n, 1], sf[n, 3:6], xb, vb)
+        for i in range(3):
+            x[i] = xb[i] - xa[i]
+            dd[i] = vb[i] - va[i]
+        k, rest, damping = sf[n, 6], sf[n, 7], sf[n, 8]
+        if rest == 0.0:
+            for i in range(3):
+                force[i] = -k * x[i] - damping * dd[i]
+        else:
+            length = math.sqrt(x[0] ** 2 + x[1] ** 2 + x[2] ** 2)
+            for i in range(3):
+                vec[i] = x[i] / length if length > 0 else 0.0
+            mag = -k * (length - rest) - damping * (vec[0] * dd[0] + vec[1] * dd[1]
+                                                   + vec[2] * dd[2])
+            for i in range(3):
+                force[i] = mag * vec[i]
+        for side in range(2):
+            body = si[n, 1 - side]
+            sign = 1.0 if side == 0 else -1.0
+            if body < 0:
+                continue
+            cross_into(vec, xb if side == 0 else xa, force)
+            for i in range(3):
+                fext[body, i] += sign * vec[i]
+                fext[body, 3 + i] += sign * force[i]
+    for i in range(tau.shape[0]):
+        tau[i] = 0.0
+    for n in range(li.shape[0]):
+        k = li[n]
+        sign = -1.0 if ji[k, 7] else 1.0
+        coord, rate = sign * q[ji[k, 3]], sign * u[ji[k, 4]]
+        load = -lf[n, 0] * (coord - lf[n, 1]) - lf[n, 2] * rate
+        if lf[n, 4] <= t < lf[n, 5]:
+            load += lf[n, 3]
+        tau[ji[k, 4]] += sign * load
+
+
+@array_inner
+def _point_state(rot, com, vel, body, local, x, v):
+    """World position and velocity of a body point (the world's points are world already)."""
+    if body < 0:
+        for i in range(3):
+            x[i], v[i] = local[i], 0.0
+        return
+    for i in range(3):
+        x[i] = com[body, i] + rot[body, i, 0] * local[0] + rot[body, i, 1] * local[1] \
+            + rot[body, i, 2] * local[2]
+    w = vel[body]
+    v[0] = vel[body, 3] + w[1] * x[2] - w[2] * x[1]
+    v[1] = vel[body, 4] + w[2] * x[0] - w[0] * x[2]
+    v[2] = vel[body, 5] + w[0] * x[1] - w[1] * x[0]

@@ -1,0 +1,284 @@
+"""A system program's cut joints and its equations of motion, compiled: the constraint rows Φ,
+G, Φ̈ at u̇ = 0 (`dynamics.systems.loops` documents the four primitives), the augmented solve and
+the least-kinetic-energy corrections of the projection (`dynamics.systems.system` documents the
+maths: B = G L⁻ᵀ = U Σ Vᵀ, λ = U Σ⁻² Uᵀ r over the singular values kept, δ = L⁻ᵀ B⁺ residual).
+
+Status codes returned: OK, LINALG (M not positive definite), SINGULAR (G's rank fell below the
+start's at an evaluated state).
+"""
+
+from __future__ import annotations
+
+from massprops.dynamics.compiled.jit import array_inner
+from massprops.dynamics.compiled.systems_linalg import (
+    cholesky,
+    jacobi_svd,
+    lower_solve,
+    upper_solve,
+)
+from massprops.dynamics.compiled.systems_loads import applied
+from massprops.dynamics.compiled.systems_mass import aba, bias, crba
+from massprops.dynamics.compiled.systems_tree import cross_into, kinematics
+
+OK, LINALG, SINGULAR = 0, 6, 3
+
+
+@array_inner
+def _point(rot, com, vel, acc, body, local, x, v, a, t):
+    """World position, velocity and acceleration (kinematics' A) of a body point."""
+    if body < 0:
+        for i in range(3):
+            x[i], v[i], a[i] = local[i], 0.0, 0.0
+        return
+    for i in range(3):
+        x[i] = com[body, i] + rot[body, i, 0] * local[0] + rot[body, i, 1] * local[1] \
+            + rot[body, i, 2] * local[2]
+    cross_into(t, vel[body, 0:3], x)
+    for i in range(3):
+        v[i] = vel[body, 3 + i] + t[i]
+    cross_into(t, acc[body, 0:3], x)
+    for i in range(3):
+        a[i] = acc[body, 3 + i] + t[i]
+    cross_into(t, vel[body, 0:3], v)
+    for i in range(3):
+        a[i] += t[i]
+
+
+@array_inner
+def _dir(rot, vel, acc, body, local, out, i):
+    """out = R_body local (the world: local), or, with i >= 0, ω (i = 0) or ω̇ (i = 1)."""
+    if i >= 0:
+        for r in range(3):
+            out[r] = (vel[body, r] if i == 0 else acc[body, r]) if body >= 0 else 0.0
+        return
+    for r in range(3):
+        out[r] = local[r] if body < 0 else (rot[body, r, 0] * local[0] + rot[body, r, 1]
+                                            * local[1] + rot[body, r, 2] * local[2])
+
+
+@array_inner
+def terms(prog, ws):
+    """Φ (m,), Φ̈ at u̇ = 0 (m,), ρ_b and ρ_a (m, 6), G (m, nv) into the workspace."""
+    pi, pf, size, pjoint, ji = prog[12], prog[13], prog[20][0], prog[6], prog[1]
+    phi, gdot, rb, ra, g, s = ws[19], ws[20], ws[21], ws[22], ws[23], ws[5]
+    rot, com, vel, acc = ws[0], ws[1], ws[2], ws[3]
+    v = ws[9]
+    xa, va, aa, xb, vb, ab, t, e = v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+    d, dd, ddd, w1, w2, w3, w4, w5 = v[8], v[9], v[10], v[11], v[12], v[13], v[14], v[15]
+    for n in range(pi.shape[0]):
+        kind, a, b, row = pi[n, 0], pi[n, 1], pi[n, 2], pi[n, 3]
+        rows = 3 if kind == 0 else 1
+        for k in range(rows):
+            for c in range(6):
+                rb[row + k, c] = ra[row + k, c] = 0.0
+        if kind == 1:  # perp
+            _dir(rot, vel, acc, a, pf[n, 6:9], e, -1)
+            _dir(rot, vel, acc, b, pf[n, 9:12], d, -1)
+            cross_into(w1, d, e)  # axis = n × e
+            phi[row] = size * (e[0] * d[0] + e[1] * d[1] + e[2] * d[2])
+            for c in range(3):
+                rb[row, c], ra[row, c] = size * w1[c], -size * w1[c]
+            _dir(rot, vel, acc, a, e, w2, 0)  # ωa
+            _dir(rot, vel, acc, b, e, w3, 0)  # ωb
+            cross_into(t, w3, d)
+            cross_into(w4, t, e)  # (ωb × n) × e
+            cross_into(t, w2, e)
+            cross_into(w5, d, t)  # n × (ωa × e)
+            x = 0.0
+            for c in range(3):
+                x += (w3[c] - w2[c]) * (w4[c] + w5[c])
+            _dir(rot, vel, acc, a, e, w2, 1)
+            _dir(rot, vel, acc, b, e, w3, 1)
+            for c in range(3):
+                x += (w3[c] - w2[c]) * w1[c]
+            gdot[row] = size * x
+        else:
+            _point(rot, com, vel, acc, a, pf[n, 0:3], xa, va, aa, t)
+            _point(rot, com, vel, acc, b, pf[n, 3:6], xb, vb, ab, t)
+            for c in range(3):
+                d[c], dd[c], ddd[c] = xb[c] - xa[c], vb[c] - va[c], ab[c] - aa[c]
+            if kind == 0:  # point
+                for k in range(3):
+                    for c in range(3):
+                        e[c] = 1.0 if c == k else 0.0
+                    _rho(rb, row + k, xb, e, 1.0)
+                    _rho(ra, row + k, xa, e, -1.0)
+                    phi[row + k], gdot[row + k] = d[k], ddd[k]
+            elif kind == 2:  # line
+                _dir(rot, vel, acc, a, pf[n, 6:9], e, -1)
+                _dir(rot, vel, acc, a, e, w2, 0)
+                cross_into(w1, w2, e)  # we
+                phi[row] = d[0] * e[0] + d[1] * e[1] + d[2] * e[2]
+                _rho(rb, row, xb, e, 1.0)
+                _rho(ra, row, xa, e, -1.0)
+                cross_into(t, e, d)
+                for c in range(3):
+                    ra[row, c] += t[c]
+                _dir(rot, vel, acc, a, e, w3, 1)
+                cross_into(w4, w3, e)
+                cross_into(w5, w2, w1)
+                x = 0.0
+                for c in range(3):
+                    x += ddd[c] * e[c] + 2 * dd[c] * w1[c] + d[c] * (w4[c] + w5[c])
+                gdot[row] = x
+            else:  # dist
+                length = pf[n, 12]
+                phi[row] = (d[0] ** 2 + d[1] ** 2 + d[2] ** 2 - length * length) / (2 * length)
+                for c in range(3):
+                    e[c] = d[c] / length
+                _rho(rb, row, xb, e, 1.0)
+                _rho(ra, row, xa, e, -1.0)
+                x = 0.0
+                for c in range(3):
+                    x += dd[c] * dd[c] + d[c] * ddd[c]
+                gdot[row] = x / length
+        for k in range(rows):  # G = ρ_b J_b + ρ_a J_a: the S columns of each body's ancestors
+            for c in range(g.shape[1]):
+                g[row + k, c] = 0.0
+            for side in range(2):
+                body = b if side == 0 else a
+                rho = rb if side == 0 else ra
+                j = pjoint[body] if body >= 0 else -1
+                while j >= 0:
+                    for c in range(ji[j, 4], ji[j, 4] + ji[j, 6]):
+                        x = 0.0
+                        for r in range(6):
+                            x += rho[row + k, r] * s[r, c]
+                        g[row + k, c] += x
+                    j = pjoint[ji[j, 1]] if ji[j, 1] >= 0 else -1
+
+
+@array_inner
+def _rho(out, row, x, e, sign):
+    """out[row] = sign (x × e, e)."""
+    out[row, 0] = sign * (x[1] * e[2] - x[2] * e[1])
+    out[row, 1] = sign * (x[2] * e[0] - x[0] * e[2])
+    out[row, 2] = sign * (x[0] * e[1] - x[1] * e[0])
+    out[row, 3], out[row, 4], out[row, 5] = sign * e[0], sign * e[1], sign * e[2]
+
+
+@array_inner
+def factor(prog, ws):
+    """After `kinematics`: M, its Cholesky factor L, the constraint terms, B = G L⁻ᵀ and its
+    SVD (ws: U (m, kk), σ (kk,), V (nv, kk), kk = min(m, nv)); False if M is not positive
+    definite. The count of singular values kept is returned in ws[30][0]."""
+    mass, low, g, bm, x, vs, sv, uo, vo, row = (ws[24], ws[25], ws[23], ws[26], ws[27], ws[28],
+                                                ws[29], ws[31], ws[32], ws[33])
+    nv, m = mass.shape[0], g.shape[0]
+    crba(prog, ws, mass)
+    if not cholesky(mass, low, nv):
+        return False
+    terms(prog, ws)
+    for i in range(m):
+        for c in range(nv):
+            row[c] = g[i, c]
+        lower_solve(low, row, nv)
+        for c in range(nv):
+            bm[i, c] = row[c]
+    kk = min(m, nv)
+    if nv <= m:
+        for i in range(m):
+            for c in range(nv):
+                x[i, c] = bm[i, c]
+        jacobi_svd(x, m, nv, vs, sv)
+        for j in range(kk):
+            for i in range(m):
+                uo[i, j] = x[i, j] / sv[j] if sv[j] > 0 else 0.0
+            for i in range(nv):
+                vo[i, j] = vs[i, j]
+    else:
+        for i in range(nv):
+            for c in range(m):
+                x[i, c] = bm[c, i]
+        jacobi_svd(x, nv, m, vs, sv)
+        for j in range(kk):
+            for i in range(nv):
+                vo[i, j] = x[i, j] / sv[j] if sv[j] > 0 else 0.0
+            for i in range(m):
+                uo[i, j] = vs[i, j]
+    top = 0.0
+    for j in range(kk):
+        top = max(top, sv[j])
+    rank_rtol = prog[20][1]
+    kept = 0
+    keep = ws[30]
+    for j in range(kk):
+        keep[1 + j] = 1 if sv[j] > rank_rtol * top else 0
+        kept += keep[1 + j]
+    keep[0] = kept
+    return True
+
+
+@array_inner
+def min_norm(low, sv, uo, vo, keep, residual, out):
+    """out (nv,) = L⁻ᵀ B⁺ residual: the smallest correction in the kinetic-energy metric with
+    G out = residual (over the kept singular values; `factor` made low, sv, uo, vo, keep)."""
+    nv, m = low.shape[0], uo.shape[0]
+    for i in range(nv):
+        out[i] = 0.0
+    for j in range(min(m, nv)):
+        if not keep[1 + j]:
+            continue
+        x = 0.0
+        for i in range(m):
+            x += uo[i, j] * residual[i]
+        x /= sv[j]
+        for i in range(nv):
+            out[i] += vo[i, j] * x
+    upper_solve(low, out, nv)
+
+
+@array_inner
+def accelerations(prog, ws, t, q, u, udot, rank0, fstats):
+    """udot = the accelerations at (t, q, u) (λ in ws[34]); SINGULAR when the rank of G fell
+    below ``rank0`` (≥ 0), fstats[2] the smallest σ_min/σ_max kept."""
+    kinematics(prog, q, u, ws)
+    applied(prog, t, q, u, ws)
+    g = ws[23]
+    m = g.shape[0]
+    if m == 0:
+        return OK if aba(prog, ws, udot) else LINALG
+    h, tau, low, gdot, sv, uo, keep, lam, rr = (ws[35], ws[12], ws[25], ws[20], ws[29],
+                                                ws[31], ws[30], ws[34], ws[36])
+    nv = h.shape[0]
+    bias(prog, ws, h)
+    if not factor(prog, ws):
+        return LINALG
+    for i in range(nv):
+        udot[i] = tau[i] - h[i]
+        h[i] = udot[i]  # h now holds τ − h, M⁻¹ of it into udot
+    lower_solve(low, udot, nv)
+    upper_solve(low, udot, nv)
+    rank = keep[0]
+    kk = min(m, nv)
+    if rank:
+        top, least = 0.0, 1e300
+        for j in range(kk):
+            top = max(top, sv[j])
+            if keep[1 + j]:
+                least = min(least, sv[j])
+        fstats[2] = min(fstats[2], least / top)
+    for i in range(m):
+        x = -gdot[i]
+        for c in range(nv):
+            x -= g[i, c] * udot[c]
+        rr[i] = x
+        lam[i] = 0.0
+    for j in range(kk):
+        if keep[1 + j]:
+            x = 0.0
+            for i in range(m):
+                x += uo[i, j] * rr[i]
+            x /= sv[j] * sv[j]
+            for i in range(m):
+                lam[i] += uo[i, j] * x
+    for c in range(nv):
+        x = h[c]
+        for i in range(m):
+            x += g[i, c] * lam[i]
+        udot[c] = x
+    if rank0 >= 0 and rank < rank0:
+        return SINGULAR
+    lower_solve(low, udot, nv)
+    upper_solve(low, udot, nv)
+    return OK

@@ -1,0 +1,179 @@
+"""The joint-space equations of a system program's tree, compiled: u̇ by the articulated-body
+algorithm where there are no loops (O(n)), and M (CRBA, O(n · depth)) with the bias h (RNEA,
+O(n)) where the loop constraints need M itself (`systems_loops`).
+
+Both from the kinematics at u̇ = 0 and the applied loads (`systems_tree`), world-frame spatial
+vectors about O (no transforms between bodies): M u̇ + h = τ, h = Sᵀ Σ_subtree (I A₀ + V ×f I V
+− f_ext). ABA (Featherstone, Rigid Body Dynamics Algorithms, §7.3, here in absolute
+coordinates): inward, U = I^A S, D = Sᵀ U, ũ = τ − Sᵀ p^A, the parent gets I^A − U D⁻¹ Uᵀ and
+p^A + I^a c + U D⁻¹ ũ (c the joint's bias acceleration); outward, u̇ = D⁻¹ (ũ − Uᵀ a_parent−c).
+"""
+
+from __future__ import annotations
+
+from massprops.dynamics.compiled.jit import array_inner
+from massprops.dynamics.compiled.systems_linalg import cholesky, lower_solve, upper_solve
+from massprops.dynamics.compiled.systems_tree import force_cross
+
+
+@array_inner
+def _net(vel, sp, fext, i, out, iv):
+    """out = V_i ×f (I_i V_i) − f_ext,i (iv scratch 6)."""
+    for r in range(6):
+        s = 0.0
+        for c in range(6):
+            s += sp[i, r, c] * vel[i, c]
+        iv[r] = s
+    force_cross(vel[i], iv, out)
+    for r in range(6):
+        out[r] -= fext[i, r]
+
+
+@array_inner
+def aba(prog, ws, udot):
+    """udot (nv,) = M⁻¹ (τ − h) of a tree without loops."""
+    ji = prog[1]
+    acc, sp, s, cb, tau = ws[3], ws[4], ws[5], ws[7], ws[12]
+    ia, pa, uu, dinv, un = ws[13], ws[14], ws[15], ws[16], ws[17]
+    v6, m6 = ws[10], ws[18]
+    n = sp.shape[0]
+    for i in range(n):
+        for r in range(6):
+            for c in range(6):
+                ia[i, r, c] = sp[i, r, c]
+        _net(ws[2], ws[4], ws[11], i, pa[i], v6[0])
+    low, tmp = m6[0], m6[1]
+    for k in range(ji.shape[0] - 1, -1, -1):
+        par, ch, iu, nvj = ji[k, 1], ji[k, 2], ji[k, 4], ji[k, 6]
+        for c in range(nvj):  # U = I^A S, ũ = τ − Sᵀ p^A
+            x = tau[iu + c]
+            for r in range(6):
+                x -= s[r, iu + c] * pa[ch, r]
+            uu[iu + c] = x
+            for r in range(6):
+                x = 0.0
+                for e in range(6):
+                    x += ia[ch, r, e] * s[e, iu + c]
+                un[k, r, c] = x
+        for a in range(nvj):  # D = Sᵀ U, its inverse (nv ≤ 6: a small Cholesky)
+            for b in range(nvj):
+                x = 0.0
+                for r in range(6):
+                    x += s[r, iu + a] * un[k, r, b]
+                tmp[a, b] = x
+        if nvj and not cholesky(tmp, low, nvj):
+            return False
+        for b in range(nvj):
+            for a in range(nvj):
+                v6[1, a] = 1.0 if a == b else 0.0
+            lower_solve(low, v6[1], nvj)
+            upper_solve(low, v6[1], nvj)
+            for a in range(nvj):
+                dinv[k, a, b] = v6[1, a]
+        if par < 0:
+            continue
+        for a in range(nvj):  # U D⁻¹ ũ, and U D⁻¹ rows (in tmp: 6 × nvj)
+            x = 0.0
+            for b in range(nvj):
+                x += dinv[k, a, b] * uu[iu + b]
+            v6[2, a] = x
+        for r in range(6):
+            for a in range(nvj):
+                x = 0.0
+                for b in range(nvj):
+                    x += un[k, r, b] * dinv[k, b, a]
+                tmp[r, a] = x
+        for r in range(6):  # I^a = I^A − U D⁻¹ Uᵀ, into the parent
+            for c in range(6):
+                x = ia[ch, r, c]
+                for a in range(nvj):
+                    x -= tmp[r, a] * un[k, c, a]
+                ia[par, r, c] += x
+                low[r, c] = x
+        for r in range(6):  # p^a = p^A + I^a c + U D⁻¹ ũ
+            x = pa[ch, r]
+            for c in range(6):
+                x += low[r, c] * cb[ch, c]
+            for a in range(nvj):
+                x += un[k, r, a] * v6[2, a]
+            pa[par, r] += x
+    for k in range(ji.shape[0]):
+        par, ch, iu, nvj = ji[k, 1], ji[k, 2], ji[k, 4], ji[k, 6]
+        for r in range(6):
+            acc[ch, r] = (acc[par, r] if par >= 0 else 0.0) + cb[ch, r]  # now the true A
+        for a in range(nvj):
+            x = uu[iu + a]
+            for r in range(6):
+                x -= un[k, r, a] * acc[ch, r]
+            v6[3, a] = x
+        for a in range(nvj):
+            x = 0.0
+            for b in range(nvj):
+                x += dinv[k, a, b] * v6[3, b]
+            udot[iu + a] = x
+        for r in range(6):
+            for a in range(nvj):
+                acc[ch, r] += s[r, iu + a] * udot[iu + a]
+    return True
+
+
+@array_inner
+def bias(prog, ws, h):
+    """h (nv,) = Sᵀ of the transmitted forces I A₀ + V ×f I V − f_ext summed over each
+    subtree (RNEA at u̇ = 0); uses the kinematics' A (u̇ = 0)."""
+    ji = prog[1]
+    acc, sp, s, pa, v6 = ws[3], ws[4], ws[5], ws[14], ws[10]
+    n = sp.shape[0]
+    for i in range(n):
+        _net(ws[2], ws[4], ws[11], i, pa[i], v6[0])
+        for r in range(6):
+            for c in range(6):
+                pa[i, r] += sp[i, r, c] * acc[i, c]
+    for k in range(ji.shape[0] - 1, -1, -1):
+        par, ch = ji[k, 1], ji[k, 2]
+        if par >= 0:
+            for r in range(6):
+                pa[par, r] += pa[ch, r]
+    for k in range(ji.shape[0]):
+        ch, iu, nvj = ji[k, 2], ji[k, 4], ji[k, 6]
+        for a in range(nvj):
+            x = 0.0
+            for r in range(6):
+                x += s[r, iu + a] * pa[ch, r]
+            h[iu + a] = x
+
+
+@array_inner
+def crba(prog, ws, mass):
+    """mass (nv, nv) = the joint-space mass matrix (composite rigid bodies)."""
+    ji, pjoint = prog[1], prog[6]
+    sp, s, comp, v6 = ws[4], ws[5], ws[13], ws[10]
+    n = sp.shape[0]
+    for i in range(n):
+        for r in range(6):
+            for c in range(6):
+                comp[i, r, c] = sp[i, r, c]
+    for k in range(ji.shape[0] - 1, -1, -1):
+        par, ch = ji[k, 1], ji[k, 2]
+        if par >= 0:
+            for r in range(6):
+                for c in range(6):
+                    comp[par, r, c] += comp[ch, r, c]
+    f = v6[0]
+    for k in range(ji.shape[0]):
+        ch, iu, nvj = ji[k, 2], ji[k, 4], ji[k, 6]
+        for a in range(nvj):
+            for r in range(6):
+                x = 0.0
+                for c in range(6):
+                    x += comp[ch, r, c] * s[c, iu + a]
+                f[r] = x
+            anc = k
+            while anc >= 0:  # this joint, then its ancestors: M[anc dofs, iu + a]
+                for b in range(ji[anc, 6]):
+                    x = 0.0
+                    for r in range(6):
+                        x += s[r, ji[anc, 4] + b] * f[r]
+                    mass[ji[anc, 4] + b, iu + a] = x
+                    mass[iu + a, ji[anc, 4] + b] = x
+                anc = pjoint[ji[anc, 1]] if ji[anc, 1] >= 0 else -1

@@ -1,0 +1,213 @@
+"""What the systems' step loop does between stages, compiled: the workspace, the right-hand side
+ẏ = [q̇, u̇], the post-step projection onto Φ = 0 and Φ̇ = 0 (Newton with the least
+kinetic-energy corrections, `systems_loops.min_norm`), and the singular-pose test between two
+accepted steps (`dynamics.systems.system.System.accept` explains the determinant's sign).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from massprops.dynamics.compiled.jit import array_inner, array_jit
+from massprops.dynamics.compiled.systems_linalg import det
+from massprops.dynamics.compiled.systems_loops import LINALG, OK, accelerations, factor, min_norm
+from massprops.dynamics.compiled.systems_tree import FREE, SPHERICAL, kinematics
+
+UNDERFLOW, STEP_LIMIT, CROSSED, UNCLOSED = 1, 2, 4, 5
+"""Status codes besides systems_loops' OK, SINGULAR and LINALG."""
+
+
+
+@array_jit
+def workspace(prog):
+    """The scratch arrays of every kernel (indices are the kernels' contract, see the names)."""
+    dims = prog[0]
+    nq, nv, m, n, nj = dims[0], dims[1], dims[2], dims[3], dims[4]
+    p, kk = max(m, nv), min(m, nv)
+    return (np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 6)), np.zeros((n, 6)),  # 0-3
+            np.zeros((n, 6, 6)), np.zeros((6, nv)), np.zeros((nj, 3)), np.zeros((n, 6)),  # 4-7
+            np.zeros((4, 3, 3)), np.zeros((16, 3)), np.zeros((6, 6)), np.zeros((n, 6)),  # 8-11
+            np.zeros(nv), np.zeros((n, 6, 6)), np.zeros((n, 6)), np.zeros(nv),  # 12-15
+            np.zeros((nj, 6, 6)), np.zeros((nj, 6, 6)), np.zeros((2, 6, 6)), np.zeros(m),  # 16-19
+            np.zeros(m), np.zeros((m, 6)), np.zeros((m, 6)), np.zeros((m, nv)),  # 20-23
+            np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((m, nv)), np.zeros((p, p)),  # 24-27
+            np.zeros((p, p)), np.zeros(p), np.zeros(1 + p, dtype=np.int64),  # 28-30
+            np.zeros((m, kk)), np.zeros((nv, kk)), np.zeros(nv), np.zeros(m),  # 31-34
+            np.zeros(nv), np.zeros(m), np.zeros(max(nq, nv)), np.zeros(nq + nv))  # 35-38
+
+
+@array_jit
+def rhs(prog, ws, t, y, out, rank0, fstats):
+    """out = ẏ at (t, y); the status of `systems_loops.accelerations`."""
+    ji = prog[1]
+    nq = prog[0][0]
+    q, u = y[:nq], y[nq:]
+    status = accelerations(prog, ws, t, q, u, out[nq:], rank0, fstats)
+    for k in range(ji.shape[0]):
+        kind, iq, iu, nqj = ji[k, 0], ji[k, 3], ji[k, 4], ji[k, 5]
+        if kind == SPHERICAL:
+            _quat_rate(q, iq, u, iu, out)
+        elif kind == FREE:
+            for i in range(3):
+                out[iq + i] = u[iu + i]
+            _quat_rate(q, iq + 3, u, iu + 3, out)
+        else:
+            for i in range(nqj):
+                out[iq + i] = u[iu + i]
+    return status
+
+
+@array_inner
+def _quat_rate(q, o, w, iw, out):
+    """out[o:o + 4] = ½ (0, w) ⊗ q[o:o + 4], w = w[iw:iw + 3]."""
+    q0, q1, q2, q3 = q[o], q[o + 1], q[o + 2], q[o + 3]
+    w0, w1, w2 = w[iw], w[iw + 1], w[iw + 2]
+    out[o] = 0.5 * -(w0 * q1 + w1 * q2 + w2 * q3)
+    out[o + 1] = 0.5 * (q0 * w0 + w1 * q3 - w2 * q2)
+    out[o + 2] = 0.5 * (q0 * w1 + w2 * q1 - w0 * q3)
+    out[o + 3] = 0.5 * (q0 * w2 + w0 * q2 - w1 * q1)
+
+
+@array_inner
+def _quat_turn(q, o, rv, ir):
+    """q[o:o + 4] = exp(rv) ⊗ q[o:o + 4], normalised (rv = rv[ir:ir + 3], world side)."""
+    angle = math.sqrt(rv[ir] ** 2 + rv[ir + 1] ** 2 + rv[ir + 2] ** 2)
+    if angle == 0.0:
+        return
+    h = 0.5 * angle
+    sh = math.sin(h) / angle
+    p0, p1, p2, p3 = math.cos(h), sh * rv[ir], sh * rv[ir + 1], sh * rv[ir + 2]
+    q0, q1, q2, q3 = q[o], q[o + 1], q[o + 2], q[o + 3]
+    w = p0 * q0 - (p1 * q1 + p2 * q2 + p3 * q3)
+    x = p0 * q1 + q0 * p1 + (p2 * q3 - p3 * q2)
+    y = p0 * q2 + q0 * p2 + (p3 * q1 - p1 * q3)
+    z = p0 * q3 + q0 * p3 + (p1 * q2 - p2 * q1)
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    q[o], q[o + 1], q[o + 2], q[o + 3] = w / n, x / n, y / n, z / n
+
+
+@array_inner
+def normalize(prog, q):
+    """Every quaternion coordinate of q renormalised in place."""
+    ji = prog[1]
+    for k in range(ji.shape[0]):
+        if ji[k, 0] == SPHERICAL or ji[k, 0] == FREE:
+            o = ji[k, 3] + (3 if ji[k, 0] == FREE else 0)
+            n = math.sqrt(q[o] ** 2 + q[o + 1] ** 2 + q[o + 2] ** 2 + q[o + 3] ** 2)
+            for i in range(4):
+                q[o + i] /= n
+
+
+@array_inner
+def _advance(prog, q, delta):
+    """q moved by the tangent delta: coordinates add, quaternions turn by exp(δ)."""
+    ji = prog[1]
+    for k in range(ji.shape[0]):
+        kind, iq, iu, nqj = ji[k, 0], ji[k, 3], ji[k, 4], ji[k, 5]
+        if kind == SPHERICAL:
+            _quat_turn(q, iq, delta, iu)
+        elif kind == FREE:
+            for i in range(3):
+                q[iq + i] += delta[iu + i]
+            _quat_turn(q, iq + 3, delta, iu + 3)
+        else:
+            for i in range(nqj):
+                q[iq + i] += delta[iu + i]
+
+
+@array_jit
+def project(prog, ws, y, iterations, moved):
+    """y moved onto Φ = 0, Φ̇ = 0 in place (System.project without fixed coordinates): status;
+    moved[0] the sum of the position corrections' max-norms, moved[1] the velocity's, moved[2]
+    the residual left when the loop cannot be closed (status UNCLOSED)."""
+    nq, m = prog[0][0], prog[0][2]
+    moved[0] = moved[1] = 0.0
+    if m == 0:
+        return OK
+    q, u = y[:nq], y[nq:]
+    normalize(prog, q)
+    atol = prog[20][2]
+    phi, g, delta, row = ws[19], ws[23], ws[37], ws[36]
+    low, sv, uo, vo, keep = ws[25], ws[29], ws[31], ws[32], ws[30]
+    nv = u.shape[0]
+    done = 0
+    while True:  # Newton on Φ: `iterations` corrections at most, then Φ must be near round-off
+        kinematics(prog, q, u, ws)
+        if not factor(prog, ws):
+            return LINALG
+        residual = _largest(phi)
+        if residual <= atol:
+            break
+        if done == iterations:
+            if residual > 1e3 * atol:
+                moved[2] = residual
+                return UNCLOSED
+            break
+        min_norm(low, sv, uo, vo, keep, phi, delta)
+        worst = 0.0
+        for i in range(nv):
+            delta[i] = -delta[i]
+            worst = max(worst, abs(delta[i]))
+        moved[0] += worst
+        _advance(prog, q, delta)
+        done += 1
+    for i in range(m):
+        x = 0.0
+        for c in range(nv):
+            x += g[i, c] * u[c]
+        row[i] = x
+    min_norm(low, sv, uo, vo, keep, row, delta)
+    worst = 0.0
+    for i in range(nv):
+        u[i] -= delta[i]
+        worst = max(worst, abs(delta[i]))
+    moved[1] = worst
+    return OK
+
+
+@array_inner
+def _largest(v):
+    out = 0.0
+    for x in v:
+        out = max(out, abs(x))
+    return out
+
+
+@array_inner
+def accept(ws, acc_b, acc_u, istats):
+    """After the right-hand side at an accepted step's end: CROSSED when a kept singular value of
+    B = G L⁻ᵀ changed sign since the last accepted step (det(U_prevᵀ B B_prevᵀ U_prev) ≤ 0),
+    else OK; the step's B and kept U become the last accepted (istats[5] their rank)."""
+    bm, uo, keep, x = ws[26], ws[31], ws[30], ws[27]
+    m, nv = bm.shape[0], bm.shape[1]
+    if m == 0 or keep[0] == 0:
+        return OK
+    r = istats[5]
+    status = OK
+    if r >= 0:
+        for a in range(r):
+            for b in range(r):
+                s = 0.0
+                for c in range(nv):
+                    pa = 0.0
+                    pb = 0.0
+                    for i in range(m):
+                        pa += acc_u[i, a] * bm[i, c]
+                        pb += acc_b[i, c] * acc_u[i, b]
+                    s += pa * pb
+                x[a, b] = s
+        if det(x, r) <= 0.0:
+            status = CROSSED
+    col = 0
+    for j in range(min(m, nv)):
+        if keep[1 + j]:
+            for i in range(m):
+                acc_u[i, col] = uo[i, j]
+            col += 1
+    for i in range(m):
+        for c in range(nv):
+            acc_b[i, c] = bm[i, c]
+    istats[5] = col
+    return status

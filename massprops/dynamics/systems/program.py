@@ -1,0 +1,83 @@
+"""A system as arrays: the "system program" the compiled kernels step (`dynamics.compiled.
+systems_*`), built once from a `System` (its Tree, loops and loads).
+
+A tuple of C-contiguous arrays, int64 or float64, in this order (the kernels index it):
+ Bodies and parents use -1 for the world (model.WORLD), as the kernels test body < 0.
+ 0 dims (5,) [nq, nv, m, bodies, tree joints];
+ 1 joints (nj, 8) int [kind code (KIND), parent body (-1 world), child, iq, iu, nq, nv,
+   reversed]; 2 axes (nj, 2, 3) joint frame; 3 s_parent (nj, 3); 4 s_child (nj, 3);
+ 5 rot_parent0 (nj, 3, 3); 6 parent_joint (n,) body -> its tree joint;
+ 7 mass (n,); 8 inertia (n, 3, 3) body axes; 9 rotation0 (n, 3, 3); 10 com0 (n, 3);
+ 11 weight (n, 3) m g, N;
+ 12 primitives (np, 4) int [kind (PRIM), a, b, first row]; 13 (np, 13) [pa, pb, ea, nb, length];
+ 14 forces (nf, 4) int [0 force / 1 torque, body, body frame, at a point];
+ 15 (nf, 8) [vector, point in the body frame, start, end];
+ 16 springs (ns, 2) int [a, b]; 17 (ns, 9) [point on a, point on b, stiffness, rest, damping];
+ 18 loaded tree joints (nl,) int; 19 (nl, 6) [stiffness, rest, damping, drive, start, end];
+ 20 (3,) [system size m, CONSTRAINT_RANK_RTOL, the projection's position tolerance m]: the
+   tolerances travel as data, so a compiled kernel never holds a stale copy of one.
+Frames and meanings as in `tree`, `loops` and `System` (the numpy objects these mirror).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from massprops import tolerances
+
+KIND = {"fixed": 0, "revolute": 1, "prismatic": 2, "cylindrical": 3, "universal": 4,
+        "spherical": 5, "free": 6}
+"""Joint kind codes (`compiled.systems_tree` names them)."""
+
+PRIM = {"point": 0, "perp": 1, "line": 2, "dist": 3}
+"""Constraint primitive codes (`compiled.systems_loops`)."""
+
+
+def build_program(system) -> tuple:
+    """The arrays of ``system`` (a `System`), see the module doc."""
+    tree, scene = system.tree, system.scene
+    bodies, joints = tree.bodies, tree.joints
+    n, nj = len(bodies), len(joints)
+    ji = np.zeros((nj, 8), np.int64)
+    axes, sp, sc, rp0 = np.zeros((nj, 2, 3)), np.zeros((nj, 3)), np.zeros((nj, 3)), \
+        np.zeros((nj, 3, 3))
+    for k, j in enumerate(joints):
+        ji[k] = [KIND[j.kind], j.parent, j.child, j.iq, j.iu, j.nq, j.nv, int(j.reversed)]
+        axes[k, :len(j.axes)] = j.axes
+        sp[k], sc[k], rp0[k] = j.s_parent, j.s_child, j.rot_parent0
+    parent_joint = np.full(n, -1, np.int64)
+    for body, k in tree.parent_joint.items():
+        parent_joint[body] = k
+    pi = np.zeros((len(tree.prims), 4), np.int64)
+    pf = np.zeros((len(tree.prims), 13))
+    row = 0
+    for k, p in enumerate(tree.prims):
+        pi[k] = [PRIM[p.kind], p.a, p.b, row]
+        pf[k] = [*p.pa, *p.pb, *p.ea, *p.nb, p.length]
+        row += p.rows
+    fi = np.zeros((len(scene.forces), 4), np.int64)
+    ff = np.zeros((len(scene.forces), 8))
+    for k, (f, local) in enumerate(zip(scene.forces, system.force_local)):
+        fi[k] = [int(f.kind == "torque"), f.body, int(f.frame == "body"), int(local is not None)]
+        ff[k] = [*f.vector, *(local if local is not None else np.zeros(3)), f.start, f.end]
+    si = np.zeros((len(scene.springs), 2), np.int64)
+    sf = np.zeros((len(scene.springs), 9))
+    for k, (s, (la, lb)) in enumerate(zip(scene.springs, system.spring_local)):
+        si[k] = [s.a, s.b]
+        sf[k] = [*la, *lb, s.stiffness, s.rest_length, s.damping]
+    li = np.array(tree.loaded, np.int64)
+    lf = np.zeros((len(tree.loaded), 6))
+    for k, jk in enumerate(tree.loaded):
+        sj = scene.joints[joints[jk].source]
+        lf[k] = [sj.stiffness, sj.rest, sj.damping, sj.drive, sj.start, sj.end]
+    dims = np.array([tree.nq, tree.nv, system.m, n, nj], np.int64)
+    out = (dims, ji, axes, sp, sc, rp0, parent_joint,
+           np.array([b.mass for b in bodies], float),
+           np.array([b.inertia for b in bodies], float).reshape(n, 3, 3),
+           np.array([b.rotation0 for b in bodies], float).reshape(n, 3, 3),
+           np.array([b.com0 for b in bodies], float).reshape(n, 3),
+           np.asarray(system.weights, float).reshape(n, 3), pi, pf, fi, ff, si, sf, li, lf,
+           np.array([tree.size, tolerances.CONSTRAINT_RANK_RTOL,
+                     tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size]))
+    return tuple(np.ascontiguousarray(a) for a in out)
+

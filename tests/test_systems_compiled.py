@@ -1,0 +1,104 @@
+"""The compiled systems kernels (dynamics/compiled/systems_*) against the numpy System they
+replace in the step loop: the same right-hand side and the same projection at random states, for
+every joint kind, loads of every kind, a floating base and loops (the numpy objects are the
+independent reference: written separately, with numpy's LAPACK where the kernels use loops)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from massprops.dynamics.compiled.systems_step import project, rhs, workspace
+from massprops.dynamics.systems import tree as tr
+from massprops.dynamics.systems.run import prepare
+from massprops.dynamics.systems.scene import load_system, parse_system
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_scenes"
+BOX = "[[0.02, 0, 0], [0, 0.03, 0], [0, 0, 0.04]]"
+
+EVERY_KIND = f"""bodies:
+  a: {{mass: 1.0, inertia: {BOX}, position: [0, 0, -0.5]}}
+  b: {{mass: 1.2, inertia: {BOX}, position: [0.1, 0, -1.0]}}
+  c: {{mass: 0.8, inertia: {BOX}, position: [0.2, 0.1, -1.5]}}
+  d: {{mass: 0.5, inertia: {BOX}, position: [0.3, 0.1, -2.0]}}
+  e: {{mass: 0.7, inertia: {BOX}, position: [1.0, 0, -0.5]}}
+  f: {{mass: 0.3, inertia: {BOX}, position: [3.0, 1.0, 0.0]}}
+joints:
+  - {{name: s, type: spherical, bodies: [world, a], point: [0, 0, 0]}}
+  - {{name: u, type: universal, bodies: [a, b], point: [0.05, 0, -0.8],
+     axes: [[1, 0, 0], [0, 1, 0]]}}
+  - {{name: c, type: cylindrical, bodies: [c, b], point: [0.15, 0, -1.2], axis: [0, 0, 1]}}
+  - {{name: p, type: prismatic, bodies: [c, d], point: [0.25, 0.1, -1.8], axis: [0.6, 0, 0.8]}}
+  - {{name: r, type: revolute, bodies: [world, e], point: [1.0, 0, 0], axis: [0, 1, 0],
+     stiffness: 2.0, damping: 0.3, torque: 0.4, start: 0.1, end: 0.5}}
+  - {{name: tie, type: distance, bodies: [d, e], points: [[0.3, 0.1, -2.0], [1.0, 0, -0.5]]}}
+initial:
+  rates: {{s: [0.3, -0.2, 0.5], u: [0.4, -0.1], r: 0.7}}
+  project_initial: true
+forces:
+  - {{type: gravity, g: [0, 0, -9.81]}}
+  - {{type: force, body: b, vector: [0.5, 0.2, 0], frame: body,
+     point: [0.1, 0, -1.0]}}
+  - {{type: torque, body: c, vector: [0, 0, 0.3], start: 0.0, end: 0.2}}
+  - {{type: spring, bodies: [a, world], points: [[0, 0, -0.5], [0, 0.5, 0]], stiffness: 5.0,
+     rest_length: 0.4, damping: 0.2}}
+  - {{type: spring, bodies: [d, f], points: [[0.3, 0.1, -2.0], [3.0, 1.0, 0.0]],
+     stiffness: 1.0, damping: 0.1}}
+time: {{duration: 1.0}}
+"""
+
+
+def _numpy_rhs(system, t, y):
+    sol = system.solve(t, y, check=False, full=False)
+    return np.concatenate([tr.qdot(system.tree, y[:system.nq], y[system.nq:]), sol.udot])
+
+
+def _states(system, y0, rng, count=4, spread=0.05):
+    out = [y0]
+    for _ in range(count):
+        y = y0 + spread * rng.standard_normal(y0.size)
+        tr.normalize(system.tree, y[:system.nq])
+        out.append(y)
+    return out
+
+
+@pytest.mark.parametrize("scene", ["every_kind", "four_bar", "chain10", "andrews",
+                                   "slider_crank", "double_pendulum"])
+def test_compiled_right_hand_side_and_projection_equal_numpy(scene):
+    if scene == "every_kind":
+        loaded = parse_system(EVERY_KIND, source="k.yaml", base_dir=SAMPLES)
+    else:
+        loaded = load_system(SAMPLES / f"{scene}.yaml")
+    system, y0, _ = prepare(loaded)
+    ws = workspace(system.program)
+    rng = np.random.default_rng(7)
+    for t in (0.15, 0.7):  # inside and outside the load windows
+        for y in _states(system, y0, rng):
+            want = _numpy_rhs(system, t, y)
+            got = np.zeros_like(y)
+            status = rhs(system.program, ws, t, y, got, -1, np.array([0, 0, 1.0, 0, 0, 0]))
+            assert status == 0
+            scale = max(1.0, float(np.abs(want).max()))
+            assert np.abs(got - want).max() <= 1e-11 * scale
+            if system.m:
+                want_y, dq, du = system.project(y)
+                got_y, moved = y.copy(), np.zeros(3)
+                assert project(system.program, ws, got_y, 12, moved) == 0
+                assert np.abs(got_y - want_y).max() <= 1e-11
+                assert moved[0] == pytest.approx(dq, rel=1e-6, abs=1e-13)
+                assert moved[1] == pytest.approx(du, rel=1e-6, abs=1e-13)
+
+
+def test_max_steps_bounds_a_system_run():
+    """max_steps (the CLI's --max-steps) stops a system run like a one-body run: RunBudgetError
+    (exit 3) naming the bound, where the step count reached it."""
+    from massprops.dynamics.systems.run import simulate_system
+    from massprops.errors import RunBudgetError, settings_in
+
+    scene = load_system(SAMPLES / "four_bar.yaml")
+    with pytest.raises(RunBudgetError) as info:
+        simulate_system(scene, rtol=1e-10, max_steps=5, estimate=False)
+    assert "took 5 steps" in str(info.value) and "max_steps" in settings_in(info.value.args[0])
+    assert simulate_system(scene, rtol=1e-6, max_steps=10_000, estimate=False).steps < 10_000
