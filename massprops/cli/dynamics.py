@@ -109,6 +109,12 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
 
             require_matplotlib()
         if _is_system(scene_path):  # `bodies:`, `model:` or a description: the systems package
+            if step is not None:  # said, not ignored: systems have no fixed-step method yet
+                from massprops.errors import UsageError, setting_ref  # deferred: rare path
+
+                raise UsageError(f"{scene_path}: {setting_ref('step')} sets a fixed-step "
+                                 "integrator's step; a system runs with its adaptive DOP853: "
+                                 f"set its accuracy with {setting_ref('rtol')}")
             _simulate_system(scene_path, as_json, output_path, integrator, rtol, every, force,
                              plot_path, duration, max_steps)
             return
