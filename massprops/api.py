@@ -120,6 +120,13 @@ def simulate(scene: Scene | SystemScene | PathLike,
 
     scene = scene if _is_scene(scene) else load_scene(scene)
     if isinstance(scene, SystemScene):
+        if options.get("step") is not None:
+            # deferred: start-up
+            from massprops.errors import UsageError
+
+            raise UsageError(f"{scene.source}: step sets a fixed-step integrator's step; a "
+                             "system runs with its adaptive DOP853: set rtol")
+        options.pop("step", None)
         return simulate_system(scene, **options)
     return run(scene, **options)
 
