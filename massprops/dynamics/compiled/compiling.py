@@ -188,6 +188,15 @@ class _Watch:
             helper.wait()
 
 
+def balanced(kernels: Sequence[str], jobs: int) -> list[list[str]]:
+    """``kernels`` split into ``jobs`` shares of about equal compile time (largest first, each
+    to the share with least to do), for compiling side by side."""
+    shares: list[list[str]] = [[] for _ in range(jobs)]
+    for name in sorted(kernels, key=lambda k: -COMPILE_SECONDS.get(k, 5.0)):
+        min(shares, key=_estimate).append(name)
+    return shares
+
+
 def _second_share(kernels: list[str]) -> list[str]:
     """The kernels the helper compiles: the first stays here (it is compiling already); the rest
     go, largest first, to whichever side has less to do."""
