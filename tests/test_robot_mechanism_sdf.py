@@ -181,3 +181,16 @@ def test_sdf_ball_universal_nested_and_static(tmp_path):
                                                  1))
     with pytest.raises(SceneError, match="nothing moves"):
         description_scene(tmp_path / "s.sdf", duration=0)
+
+
+@pytest.mark.parametrize("name, text, root", [
+    ("e.urdf", '<robot name="r"/>', "<robot>"),
+    ("e.sdf", '<sdf version="1.7"><model name="m"/></sdf>', "<sdf>"),
+    ("e.xml", "<mujoco><worldbody/></mujoco>", "<mujoco>")])
+def test_description_without_links_is_one_line_naming_its_root(tmp_path, run, name, text, root):
+    path = tmp_path / name
+    path.write_text(text)
+    result = run("simulate", path, "--duration", "0")
+    assert result.exit_code == 1 and result.stdout == ""
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and f"{name}:1: {root}: no links" in lines[0]

@@ -20,7 +20,8 @@ def read_mechanism(model: RobotModel) -> Mechanism:
     """The joints and link poses of a parsed description (`analyze.load_model`); raises
     RobotModelError (one line) for a joint the systems engine cannot express."""
     if not model.links:
-        raise Values(model.path).error(Node("robot", {}, 1, 0, 0), "no links: nothing moves")
+        root_name = {"urdf": "robot", "sdf": "sdf", "mjcf": "mujoco"}.get(model.format, "robot")
+        raise Values(model.path).error(Node(root_name, {}, 1, 0, 0), "no links: nothing moves")
     root = model.links[0].node
     while root.parent is not None:
         root = root.parent
