@@ -149,6 +149,13 @@ singular value at ~1e-16 of the largest; a true one of a non-degenerate pose sta
 (unless the mechanism nears a singular pose, which is reported when its rank drops). 1e-8 sits
 in the middle of that gap on the log scale."""
 
+NEAR_SINGULAR_MARGIN = 1e-6
+"""An accepted state of a system run whose smallest kept singular value of G M^(-1/2) is below
+this fraction of the largest is a singular pose, reported like a rank drop: steps of ~1e-2 s
+straddle the flat pose of a parallelogram four-bar landing at 1.2e-8..1.4e-8, just above
+CONSTRAINT_RANK_RTOL, and would pass it on one branch without a word. Mechanisms away from a
+singular pose stay above ~1e-3 (the samples: 0.05 to 0.5)."""
+
 PROJECTION_ATOL_ULPS = 64
 """A system's positions and velocities are projected onto Φ = 0 and Φ̇ = 0 until the residual
 is within this many ulps of the system size (positions, m) or of its speed scale (velocities):

@@ -9,8 +9,9 @@ output is built from its start and its projected end and each sample projected i
 istats: [steps, evaluations, rejected, status, next output index, rank of the last accepted
 step's B (-1: none yet), rank of G at the start (-1: unchecked)]; fstats: [largest position
 correction, largest velocity correction, singularity margin, time of a failure, start of the
-failing step, residual left unclosed]. A failure stops the segment with its status (codes in
-`systems_step`); ``yfail`` then holds the state where it happened.
+failing step, residual left unclosed, smallest margin at an accepted state]. A failure stops
+the segment with its status (codes in `systems_step`); ``yfail`` then holds the state where it
+happened.
 """
 
 from __future__ import annotations
@@ -82,7 +83,10 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
     if status != OK:
         _fail(istats, fstats, yfail, status, t0, y)
         return
-    status = accept(ws, acc_b, acc_u, istats)
+    if accept(prog, ws, acc_b, acc_u, istats, fstats, t0) == CROSSED:  # starts at the pose
+        fstats[4] = t0
+        _fail(istats, fstats, yfail, CROSSED, t0, y)
+        return
     hmax = t1 - t0
     # the initial step (Hairer's HINIT)
     dnf = dny = 0.0
@@ -161,8 +165,8 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
             if status != OK:
                 _fail(istats, fstats, yfail, status, t_new, ynew)
                 return
-            if accept(ws, acc_b, acc_u, istats) == CROSSED:
-                fstats[4] = t
+            if accept(prog, ws, acc_b, acc_u, istats, fstats, t_new) == CROSSED:
+                fstats[4] = t if fstats[6] > prog[20][3] else t_new  # at t_new: reached it
                 _fail(istats, fstats, yfail, CROSSED, t_new, ynew)
                 return
             kout = istats[4]
@@ -235,8 +239,10 @@ def warm_up() -> None:
             np.ones(1), np.eye(3).reshape(1, 3, 3), np.eye(3).reshape(1, 3, 3),
             np.array([[0.0, 0.0, -0.5]]), np.array([[0.0, 0.0, -9.81]]), np.zeros((0, 4), ints),
             np.zeros((0, 13)), np.zeros((0, 4), ints), np.zeros((0, 8)), np.zeros((0, 2), ints),
-            np.zeros((0, 9)), np.zeros(0, ints), np.zeros((0, 6)), np.array([1.0, 1e-8, 1e-14]))
+            np.zeros((0, 9)), np.zeros(0, ints), np.zeros((0, 6)),
+            np.array([1.0, 1e-8, 1e-14, 1e-6]))
     y = np.array([0.1, 0.0])
     run_segment(prog, y, 0.0, 1e-3, 1e-6, np.ones(2), np.array([0.0, 1e-3]), np.zeros((2, 2)),
-                np.array([0, 0, 0, OK, 1, -1, -1], ints), np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]),
+                np.array([0, 0, 0, OK, 1, -1, -1], ints),
+                np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]),
                 np.zeros((0, 1)), np.zeros((0, 1)), 1000, np.zeros(2))

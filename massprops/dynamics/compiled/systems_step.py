@@ -1,7 +1,7 @@
 """What the systems' step loop does between stages, compiled: the workspace, the right-hand side
 ẏ = [q̇, u̇], the post-step projection onto Φ = 0 and Φ̇ = 0 (Newton with the least
 kinetic-energy corrections, `systems_loops.min_norm`), and the singular-pose test between two
-accepted steps (`dynamics.systems.system.System.accept` explains the determinant's sign).
+accepted steps (`accept`, whose docstring gives the rule; docs/systems.md, "Singular poses").
 """
 
 from __future__ import annotations
@@ -176,16 +176,27 @@ def _largest(v):
 
 
 @array_inner
-def accept(ws, acc_b, acc_u, istats):
-    """After the right-hand side at an accepted step's end: CROSSED when a kept singular value of
-    B = G L⁻ᵀ changed sign since the last accepted step (det(U_prevᵀ B B_prevᵀ U_prev) ≤ 0),
-    else OK; the step's B and kept U become the last accepted (istats[5] their rank)."""
-    bm, uo, keep, x = ws[26], ws[31], ws[30], ws[27]
+def accept(prog, ws, acc_b, acc_u, istats, fstats, t):
+    """After the right-hand side at an accepted state (time t): CROSSED when a kept singular
+    value of B = G L⁻ᵀ changed sign since the last accepted step (det(U_prevᵀ B B_prevᵀ U_prev)
+    ≤ 0) or is below prog[20][3] (NEAR_SINGULAR_MARGIN) of the largest (fstats[6] the smallest
+    such ratio), else OK; the step's B and kept U become the last accepted (istats[5] their
+    rank)."""
+    bm, uo, keep, x, sv = ws[26], ws[31], ws[30], ws[27], ws[29]
     m, nv = bm.shape[0], bm.shape[1]
     if m == 0 or keep[0] == 0:
         return OK
     r = istats[5]
     status = OK
+    top, least = 0.0, 1e300
+    for j in range(min(m, nv)):
+        top = max(top, sv[j])
+        if keep[1 + j]:
+            least = min(least, sv[j])
+    if least < fstats[6] * top:
+        fstats[6] = least / top
+    if least < prog[20][3] * top:
+        status = CROSSED
     if r >= 0:
         for a in range(r):
             for b in range(r):

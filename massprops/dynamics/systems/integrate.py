@@ -24,6 +24,17 @@ from massprops.errors import RunBudgetError, setting_ref
 
 MAX_STEPS = 2_000_000
 
+NARROW_RTOL = 1e-12
+"""Tolerance of the run that finds a singular pose inside the step that jumped across it: its
+steps are short enough to land within NEAR_SINGULAR_MARGIN of the pose (the parallelogram
+four-bar's flat pose to 1e-6 s where steps at rtol 1e-9 span 0.25-0.72 s)."""
+
+NARROW_RUNS = 3
+"""Fine runs at most, each over the shorter crossing step the previous one found."""
+
+NARROW_STEPS = 100_000
+"""Steps one locating run may take."""
+
 
 class Run:
     """Samples ``y_out`` (n_out, ny) at ``t_out``, steps, evaluations, rejected steps, the
@@ -55,7 +66,7 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, rtol: float, floors: np
     m, nv = system.m, system.nv
     istats = np.array([0, 0, 0, codes.OK, kout, -1,
                        -1 if system.rank is None else system.rank], dtype=np.int64)
-    fstats = np.array([0.0, 0.0, system.margin, 0.0, 0.0, 0.0])
+    fstats = np.array([0.0, 0.0, system.margin, 0.0, 0.0, 0.0, 1.0])
     accepted_b, accepted_u = np.zeros((m, nv)), np.zeros((m, max(m, nv)))
     yfail = np.zeros(y.size)
     for t0, t1 in zip(edges[:-1], edges[1:]):
@@ -63,6 +74,9 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, rtol: float, floors: np
         run_segment(system.program, y, t0, t1, float(rtol), within, t_out, run.y_out, istats,
                     fstats, accepted_b, accepted_u, max_steps, yfail)
         if istats[3] != codes.OK:
+            if istats[3] == codes.CROSSED and fstats[4] < fstats[3]:  # a step jumped across it
+                fstats[4], fstats[3] = _narrow(system, y, float(fstats[4]), float(fstats[3]),
+                                               rtol, scales, floors)
             run.failure = _failure(system, int(istats[3]), fstats, yfail, max_steps)
             break
         run.t_reached = t1
@@ -70,6 +84,29 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, rtol: float, floors: np
     run.moved_q, run.moved_u = float(fstats[0]), float(fstats[1])
     system.margin = float(fstats[2])
     return run
+
+
+def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales: np.ndarray,
+            floors: np.ndarray) -> tuple[float, float]:
+    """Where in [low, high] (s) a step crossed a singular pose: that stretch is run again from
+    ``y`` (the state at ``low``) at NARROW_RTOL, whose small steps reach the pose itself
+    (`tolerances.NEAR_SINGULAR_MARGIN`): (t, t); or cross it again in a shorter step, which is
+    run again in turn (NARROW_RUNS at most). Where a run sees nothing the interval stays."""
+    y_low, n = np.array(y, dtype=float), y.size
+    for _ in range(NARROW_RUNS):
+        trial = y_low.copy()
+        istats = np.array([0, 0, 0, codes.OK, 0, -1, system.rank], dtype=np.int64)
+        fstats = np.array([0.0, 0.0, system.margin, 0.0, 0.0, 0.0, 1.0])
+        run_segment(system.program, trial, low, high, min(float(rtol), NARROW_RTOL),
+                    np.maximum(np.maximum(np.abs(trial), floors), scales), np.empty(0),
+                    np.empty((0, n)), istats, fstats, np.zeros((system.m, system.nv)),
+                    np.zeros((system.m, max(system.m, system.nv))), NARROW_STEPS, np.zeros(n))
+        if istats[3] != codes.CROSSED:
+            break
+        low, high, y_low = float(fstats[4]), float(fstats[3]), trial
+        if low == high:
+            break
+    return low, high
 
 
 def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray,
@@ -85,8 +122,9 @@ def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray,
     if status == codes.LINALG:
         return np.linalg.LinAlgError("Matrix is not positive definite")
     if status == codes.CROSSED:
+        since = float(fstats[4])  # == t: an accepted state at the pose (NEAR_SINGULAR_MARGIN)
         return SingularPose(system.singular_message(t, np.zeros((system.m, 0)),
-                                                    since=float(fstats[4])))
+                                                    since=None if since == t else since))
     if status == codes.UNCLOSED:
         return SingularPose(f"{system.scene.source}: the joints cannot be closed at "
                             f"t = {t:.6g} s (position residual {fstats[5]:.3g} m after "

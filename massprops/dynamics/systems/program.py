@@ -78,6 +78,7 @@ def build_program(system) -> tuple:
            np.array([b.com0 for b in bodies], float).reshape(n, 3),
            np.asarray(system.weights, float).reshape(n, 3), pi, pf, fi, ff, si, sf, li, lf,
            np.array([tree.size, tolerances.CONSTRAINT_RANK_RTOL,
-                     tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size]))
+                     tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size,
+                     tolerances.NEAR_SINGULAR_MARGIN]))
     return tuple(np.ascontiguousarray(a) for a in out)
 
