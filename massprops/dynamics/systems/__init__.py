@@ -12,9 +12,14 @@ positions and velocities are projected back onto Φ = 0 and Φ̇ = 0 (Newton, co
 kinetic-energy norm): no Baumgarte gains, no penalties. Reactions are the notes' own
 g^(c) = M ḣ + b - g per body, summed over each subtree from the leaves in.
 
-Modules: ``model`` (value objects), ``scene`` (the YAML rules), ``tree`` (topology, kinematics,
-CRBA, RNEA), ``loops`` (cut-joint constraints), ``dynamics`` (accelerations, reactions,
-projection), ``integrate`` (DOP853 with projection and dense output), ``run`` (simulate a system
-scene: outputs, diagnostics, error estimate). Plain numpy, O(n) per tree pass (CRBA O(n·depth));
-nothing here imports numba.
+Modules: ``model`` (value objects), ``scene`` (the YAML rules), ``assemble`` (the spanning tree,
+cut joints, initial coordinates), ``tree`` (kinematics, CRBA, RNEA), ``loops`` (cut-joint
+constraints), ``system`` (accelerations, reactions, projection at the start and the outputs),
+``program`` (the system as arrays for the compiled step loop, dynamics/compiled/systems_*),
+``integrate`` (that loop's calls: DOP853 with projection and dense output, singular poses),
+``outputs`` and ``run`` (simulate a system scene: outputs, diagnostics, error estimate),
+``precision``, ``plots``; robot descriptions as systems: ``description`` (links and joints ->
+bodies and joints), ``robot_scene`` (``model:`` scenes, ``simulate ROBOT``), ``holding`` (the
+static torques). Here numpy, O(n) per tree pass (CRBA O(n·depth)); the step loop is compiled
+(ABA for trees, O(n)), and nothing here imports numba itself.
 """
