@@ -231,3 +231,26 @@ def test_mjcf_option_gravity_is_used(tmp_path, run):
     # weight 2 x 1.62 N at 0.5 m: the motor holds with -1.62 N·m about +y
     held = json.loads(result.stdout)["final"]["joints"]["h"]["holding"][0]
     assert held == pytest.approx(-1.62, rel=1e-14)
+
+
+def test_compiler_mass_rules_reach_the_bodies_as_mujoco_compiles_them(tmp_path):
+    """<compiler settotalmass boundmass boundinertia> change the inertials MuJoCo simulates;
+    the mechanism's bodies carry the same (against MuJoCo's compiled body_mass, body_inertia)."""
+    mujoco = pytest.importorskip("mujoco")
+    path = tmp_path / "rules.xml"
+    path.write_text("""<mujoco><compiler settotalmass="10" boundmass="0.5" boundinertia="0.002"/>
+  <worldbody><body name="a" pos="0 0 1"><joint type="hinge" axis="0 1 0"/>
+    <inertial pos="0.5 0 0" mass="1" diaginertia="0.1 0.1 0.01"/>
+    <body name="b" pos="1 0 0"><joint type="hinge" axis="0 1 0"/>
+      <inertial pos="0.5 0 0" mass="3" diaginertia="0.1 0.15 0.06"/></body>
+    <body name="c" pos="0 1 0"><joint type="hinge" axis="1 0 0"/>
+      <inertial pos="0 0.1 0" mass="0.1" diaginertia="0.001 0.001 0.001"/></body>
+  </body></worldbody></mujoco>""")
+    ours = {b.name: b for b in describe(path).bodies}
+    model = mujoco.MjModel.from_xml_path(str(path))
+    for name in ("a", "b", "c"):
+        k = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+        assert abs(ours[name].mass - model.body_mass[k]) < 1e-12 * model.body_mass[k]
+        moments = np.linalg.eigvalsh(ours[name].inertia)
+        assert np.allclose(np.sort(moments), np.sort(model.body_inertia[k]), rtol=1e-12)
+    assert abs(sum(b.mass for b in ours.values()) - 10.0) < 1e-12
