@@ -233,10 +233,11 @@ def test_mjcf_option_gravity_is_used(tmp_path, run):
     assert held == pytest.approx(-1.62, rel=1e-14)
 
 
-def test_compiler_mass_rules_reach_the_bodies_as_mujoco_compiles_them(tmp_path):
+def test_compiler_mass_rules_reach_the_bodies_as_mujoco_compiles_them(tmp_path, monkeypatch):
     """<compiler settotalmass boundmass boundinertia> change the inertials MuJoCo simulates;
     the mechanism's bodies carry the same (against MuJoCo's compiled body_mass, body_inertia)."""
     mujoco = pytest.importorskip("mujoco")
+    monkeypatch.chdir(tmp_path)  # MuJoCo logs settotalmass's deprecation to ./MUJOCO_LOG.TXT
     path = tmp_path / "rules.xml"
     path.write_text("""<mujoco><compiler settotalmass="10" boundmass="0.5" boundinertia="0.002"/>
   <worldbody><body name="a" pos="0 0 1"><joint type="hinge" axis="0 1 0"/>
