@@ -18,10 +18,11 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Iterator
 from types import SimpleNamespace
 from typing import Any
 
-__all__ = ["ANALYTIC_FACES", "face_census", "is_analytic", "occ_area"]
+__all__ = ["ANALYTIC_FACES", "basis_faces", "face_census", "is_analytic", "occ_area"]
 
 ANALYTIC_FACES = ("plane", "cylinder", "cone", "sphere", "torus")
 """Face types whose Gauss integration is exact to round-off."""
@@ -51,6 +52,20 @@ def _occ() -> SimpleNamespace:
                            FACE=TopAbs_FACE, Explorer=TopExp_Explorer, TopoDS=TopoDS)
 
 
+def basis_faces(shape: Any) -> Iterator[tuple[Any, Any]]:
+    """(face, its surface with every rectangular trim taken off) for each face of ``shape``: the
+    surface type decides how a face is integrated, the face's own bounds how far."""
+    k = _occ()
+    explorer = k.Explorer(shape, k.FACE)
+    while explorer.More():
+        face = k.TopoDS.Face(explorer.Current())
+        surface = k.BRep_Tool.Surface_s(face)
+        while isinstance(surface, k.Trimmed):
+            surface = surface.BasisSurface()
+        yield face, surface
+        explorer.Next()
+
+
 def face_census(shape: Any, free_area: bool = True) -> tuple[dict[str, int], float, list]:
     """({surface type: count}, an upper bound of the total face area, [free-form faces]) of
     ``shape``, lengths in its own unit; with ``free_area`` False the free-form faces' area is
@@ -59,12 +74,7 @@ def face_census(shape: Any, free_area: bool = True) -> tuple[dict[str, int], flo
     faces: dict[str, int] = {}
     free = []
     area = 0.0
-    explorer = k.Explorer(shape, k.FACE)
-    while explorer.More():
-        face = k.TopoDS.Face(explorer.Current())
-        surface = k.BRep_Tool.Surface_s(face)
-        while isinstance(surface, k.Trimmed):
-            surface = surface.BasisSurface()
+    for face, surface in basis_faces(shape):
         kind = _GEOM_NAMES.get(type(surface).__name__, "other")
         faces[kind] = faces.get(kind, 0) + 1
         if kind in ANALYTIC_FACES:
@@ -73,7 +83,6 @@ def face_census(shape: Any, free_area: bool = True) -> tuple[dict[str, int], flo
             free.append(face)
             if free_area:
                 area += occ_area([face])
-        explorer.Next()
     return faces, area, free
 
 

@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from massprops.cad.faces import face_census
+from massprops.cad.faces import basis_faces, face_census
 from massprops.cad.integrate import SolidIntegral, localise
 from massprops.errors import DegenerateMeshError, UsageError, setting_ref
 from massprops.mesh.facesums import U
@@ -102,12 +102,7 @@ def integrate_shell(local: Any, thickness: float, name: str) -> ShellIntegral:
     area, first, second, nn = 0.0, np.zeros(3), np.zeros((3, 3)), np.zeros((3, 3))
     nn_bar = 0.0
     curvature = np.zeros(2)   # Σ A κ², Σ A κ
-    explorer = k.TopExp_Explorer(local, k.TopAbs_FACE)
-    while explorer.More():
-        face = k.TopoDS.Face(explorer.Current())
-        surface = k.BRep_Tool.Surface_s(face)
-        while isinstance(surface, k.Geom_RectangularTrimmedSurface):
-            surface = surface.BasisSurface()
+    for face, surface in basis_faces(local):
         kind = type(surface).__name__
         props = k.GProp_GProps()
         k.BRepGProp.SurfaceProperties_s(face, props)
@@ -130,7 +125,6 @@ def integrate_shell(local: Any, thickness: float, name: str) -> ShellIntegral:
         nn += face_nn
         nn_bar += a if bounded else 0.0
         curvature += a * np.array([kappa * kappa, kappa])
-        explorer.Next()
     joins, turning, folded = _joins(local, t)
     return ShellIntegral(t * area, t * first, t * second + t**3 / 12 * nn,
                          *_model_bar(local, t, curvature, nn_bar, joins), area, turning,

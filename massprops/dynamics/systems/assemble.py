@@ -114,6 +114,15 @@ def build_tree(scene: SystemScene) -> Tree:
     return Tree(bodies, joints, parent_joint, cut, prims, of_scene, iq, iu, scene.size, loaded)
 
 
+def _tree_order(j: TreeJoint, value: np.ndarray) -> np.ndarray:
+    """A one- or two-axis joint's scene coordinates (or rates) as the tree keeps them: a joint
+    the tree runs from its second body to its first turns or shifts the other way, and a
+    universal joint's axes come in the other order (`build_tree`)."""
+    if not j.reversed:
+        return value
+    return -(value[::-1] if j.kind == "universal" else value)
+
+
 def _parents_first(joints: list[TreeJoint]) -> list[TreeJoint]:
     """The joints ordered so that a body's joint comes after its parent's (BFS already is)."""
     done, out = {WORLD}, []
@@ -148,13 +157,11 @@ def initial_coordinates(scene: SystemScene, tree: Tree) -> tuple[np.ndarray, np.
                                  f"initial {key[:-1]}; remove it")
             j = tree.joints[tree.of_scene[k][1]]
             value = np.asarray(value, float)
-            sign = -1.0 if j.reversed else 1.0
             if key == "rates":
                 if value.size != j.nv:
                     raise SceneError(f"{where}expected {j.nv} rate(s) for a {j.kind} joint, "
                                      f"got {value.size}")
-                u[j.iu:j.iu + j.nv] = sign * (value[::-1] if j.kind == "universal"
-                                              and j.reversed else value)
+                u[j.iu:j.iu + j.nv] = _tree_order(j, value)
                 fixed_u.update(range(j.iu, j.iu + j.nv))
                 continue
             if j.kind == "spherical":
@@ -167,8 +174,7 @@ def initial_coordinates(scene: SystemScene, tree: Tree) -> tuple[np.ndarray, np.
                 if value.size != j.nq:
                     raise SceneError(f"{where}expected {j.nq} value(s) for a {j.kind} joint, "
                                      f"got {value.size}")
-                q[j.iq:j.iq + j.nq] = sign * (value[::-1] if j.kind == "universal"
-                                              and j.reversed else value)
+                q[j.iq:j.iq + j.nq] = _tree_order(j, value)
             fixed_q.update(range(j.iu, j.iu + j.nv))
     for name, (v, w) in scene.initial.velocities.items():
         i = next(i for i, b in enumerate(tree.bodies) if b.name == name)
