@@ -174,3 +174,13 @@ def test_auto_picks_implicit_for_a_stiff_system():
     assert rigid.as_dict()["integrator"] == "dop853"
     gap = np.abs(run.samples.position - rigid.samples.position).max()
     assert gap < 1e-10, gap  # measured: 4e-13 m
+
+
+def test_a_coarse_step_that_jumps_a_loop_says_so(four_bar):
+    """RK4 at 0.5 s moves the crank ~1 rad a step: one step lands the loop beyond a dead point
+    that the crank-rocker never reaches (Grashof: its crank turns all the way round). A fine run
+    of that stretch passes, so the step is blamed, not the mechanism."""
+    scene, _ = four_bar
+    with pytest.raises(ComputationError, match="jumped the loop.*step") as info:
+        simulate_system(scene, integrator="rk4", step=0.5, estimate=False)
+    assert "\n" not in str(info.value)

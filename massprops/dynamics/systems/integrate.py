@@ -80,11 +80,16 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors:
         run_segment(system.program, y, t0, t1, float(setting), METHODS[method], within, t_out,
                     run.y_out, istats, fstats, accepted_b, accepted_u, max_steps, yfail)
         if istats[3] != codes.OK:
+            run.failure = None
             if istats[3] == codes.CROSSED and fstats[4] < fstats[3]:  # a step jumped across it
                 rtol = float(setting) if method == "dop853" else NARROW_RTOL
-                fstats[4], fstats[3] = _narrow(system, y, float(fstats[4]), float(fstats[3]),
-                                               rtol, scales, floors)
-            run.failure = _failure(system, int(istats[3]), fstats, yfail, max_steps, method)
+                low, high, seen = _narrow(system, y, float(fstats[4]), float(fstats[3]), rtol,
+                                          scales, floors)
+                fstats[4], fstats[3] = low, high
+                if not seen:
+                    run.failure = _jumped(system, low, high, method)
+            if run.failure is None:
+                run.failure = _failure(system, int(istats[3]), fstats, yfail, max_steps, method)
             break
         run.t_reached = t1
     run.steps, run.nfev, run.rejected = (int(v) for v in istats[:3])
@@ -94,13 +99,15 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors:
 
 
 def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales: np.ndarray,
-            floors: np.ndarray) -> tuple[float, float]:
+            floors: np.ndarray) -> tuple[float, float, bool]:
     """Where in [low, high] (s) a step crossed a singular pose: that stretch is run again from
     ``y`` (the state at ``low``) at NARROW_RTOL, whose small steps reach the pose itself
     (`tolerances.NEAR_SINGULAR_MARGIN`): (t, t); or cross it again in a shorter step, which is
-    run again in turn (NARROW_RUNS at most). Where a run sees nothing the interval stays."""
+    run again in turn (NARROW_RUNS at most). Where a run sees nothing the interval stays; the
+    flag says whether the first run saw the pose at all (a coarse step can jump the loop to a
+    state beyond one that the motion itself never reaches: the four-bar at RK4 steps of 0.5 s)."""
     y_low, n = np.array(y, dtype=float), y.size
-    for _ in range(NARROW_RUNS):
+    for k in range(NARROW_RUNS):
         trial = y_low.copy()
         istats = np.array([0, 0, 0, codes.OK, 0, -1, system.rank], dtype=np.int64)
         fstats = np.array([0.0, 0.0, system.margin, 0.0, 0.0, 0.0, 1.0])
@@ -109,11 +116,23 @@ def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales:
                     np.empty((0, n)), istats, fstats, np.zeros((system.m, system.nv)),
                     np.zeros((system.m, max(system.m, system.nv))), NARROW_STEPS, np.zeros(n))
         if istats[3] != codes.CROSSED:
+            if k == 0:
+                return low, high, False
             break
         low, high, y_low = float(fstats[4]), float(fstats[3]), trial
         if low == high:
             break
-    return low, high
+    return low, high, True
+
+
+def _jumped(system, low: float, high: float, method: str) -> BaseException:
+    """The run's step from ``low`` to ``high`` crossed a singular pose that a fine run of that
+    stretch does not reach: the step, not the mechanism, is at fault."""
+    fix = (f"tighten {setting_ref('rtol')}" if method == "dop853"
+           else f"shorten {setting_ref('step')}")
+    return ArithmeticError(f"the {method} step from t = {low:.6g} to {high:.6g} s jumped the "
+                           "loop across a singular pose that the motion does not reach (a run "
+                           f"at rtol {NARROW_RTOL:g} passes there); {fix}")
 
 
 def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: int,
