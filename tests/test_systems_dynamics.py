@@ -141,7 +141,7 @@ def test_energy_conserved_double_pendulum():
 @pytest.mark.slow
 def test_convergence_order_and_estimate():
     scene = with_time(load_system(SAMPLES / "double_pendulum.yaml"), duration=2.0)
-    from massprops.dynamics.systems.methods import distance
+    from massprops.dynamics.systems.outputs import distance
 
     ref = simulate_system(scene, rtol=1e-13, every=0.1, estimate=False).samples
     steps, errors = [], []

@@ -4,20 +4,18 @@ The methods are the registry's names with a systems kernel (`integrate`): dop853
 rtol), rk4, midpoint and implicit (fixed step h). The error estimate is global, as for one body
 (`dynamics.accuracy`): companion runs at `accuracy.companion_settings` (rtol / 20; or 2h and
 4h with Richardson's rule, `accuracy.global_estimate`), compared in the contract's metric over
-all bodies (`distance`: position error / system size, orientation angle, velocity errors
-relative to the run's largest speeds).
+all bodies (`outputs.distance`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from massprops import tolerances
 from massprops.dynamics.accuracy import companion_settings, global_estimate
 from massprops.dynamics.systems.integrate import integrate
-from massprops.dynamics.systems.outputs import Samples, body_states
+from massprops.dynamics.systems.outputs import Samples, distance, evaluate_states
+from massprops.dynamics.systems.stiffness import fastest_rate, unresolved_mode_error
 from massprops.dynamics.systems.system import System
-from massprops.rotation import rotation_angle_between
 
 SYSTEM_INTEGRATORS = ("auto", "dop853", "rk4", "midpoint", "implicit")
 """What a system scene may name: the registry's methods with a systems kernel over [q, u]
@@ -72,11 +70,13 @@ def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
                    setting: float, floors: np.ndarray, windows: np.ndarray, samples: Samples,
                    limit: int) -> float | None:
     """The run's global error estimate from its companion runs (`accuracy.companion_settings`
-    and `global_estimate`, in the systems' metric `distance`); None where the first companion
-    failed. A method whose order can fall on stiff modes (``estimate_order``: Radau IIA to its
-    stage order 3) is credited its full order where the step resolves the start's fastest rate
-    (h ρ < 1): there is no stiff mode to reduce it, and the reduced credit overstated the
-    four-bar's error 18-fold at h = 20 ms."""
+    and `global_estimate`, in the systems' metric `outputs.distance`), and for a stiff method
+    at a step that does not resolve the fastest rate at least
+    `stiffness.unresolved_mode_error`; None where the first companion failed. A method whose
+    order can fall on stiff modes (``estimate_order``: Radau IIA to its stage order 3) is
+    credited its full order where the step resolves the start's fastest rate (h ρ < 1): there
+    is no stiff mode to reduce it, and the reduced credit overstated the four-bar's error
+    18-fold at h = 20 ms."""
     # deferred: the registry imports the one-body kernels' modules (their orders only here)
     from massprops.dynamics.integrators import INTEGRATORS
 
@@ -94,7 +94,11 @@ def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
     credit = spec.estimate_order
     if credit is not None and setting * fastest_rate(system, y0) < 1.0:
         credit = spec.order
-    return global_estimate(spec.kind, spec.order, d_run, d_companions, credit)
+    estimate = global_estimate(spec.kind, spec.order, d_run, d_companions, credit)
+    if spec.stiff:  # a fast mode all three runs damp or alias alike: measured apart
+        estimate = max(estimate, unresolved_mode_error(system, y0, name, setting, floors,
+                                                       windows, t_out, samples, limit))
+    return estimate
 
 
 def default_step(system: System, y0: np.ndarray, duration: float, *, stiff: bool) -> float:
@@ -107,43 +111,3 @@ def default_step(system: System, y0: np.ndarray, duration: float, *, stiff: bool
         return h
     rate = fastest_rate(system, y0)
     return min(h, 0.1 / rate) if rate > 0 else h
-
-
-def fastest_rate(system: System, y0: np.ndarray) -> float:
-    """ρ(∂ẏ/∂y) at (0, y0), 1/s, by forward differences (n numpy evaluations)."""
-    # deferred: the numpy tree's q̇, only for this estimate
-    from massprops.dynamics.systems.tree import qdot
-
-    def f(y: np.ndarray) -> np.ndarray:
-        udot = system.solve(0.0, y, check=False, full=False).udot
-        return np.concatenate([qdot(system.tree, y[:system.nq], y[system.nq:]), udot])
-
-    f0, n = f(y0), y0.size
-    jac = np.empty((n, n))
-    for j in range(n):
-        d = np.sqrt(tolerances.EPS) * max(1.0, abs(y0[j]))
-        y = y0.copy()
-        y[j] += d
-        jac[:, j] = (f(y) - f0) / (y[j] - y0[j])
-    return float(np.abs(np.linalg.eigvals(jac)).max(initial=0.0))
-
-
-def evaluate_states(system: System, t: np.ndarray, y: np.ndarray) -> Samples:
-    """Body states only (no joints, reactions or energy): for comparing runs."""
-    pos, quat, vel, omega = body_states(system, y)
-    none = np.zeros((len(t), 0, 3))
-    return Samples(t, pos, quat, vel, omega, [], [], none, none, None)
-
-
-def distance(a: Samples, b: Samples, size: float) -> float:
-    """The contract's error between two system runs: the largest over the bodies of position
-    error / system size, orientation angle, velocity errors relative to the largest speeds."""
-    duration = float(a.t[-1]) or 1.0
-    v_scale = max(float(np.abs(a.velocity).max()), size / duration)
-    w_scale = max(float(np.abs(a.angular_velocity).max()), 1.0 / duration)
-    parts = [np.linalg.norm(a.position - b.position, axis=-1).max() / size,
-             rotation_angle_between(a.orientation.reshape(-1, 4),
-                                    b.orientation.reshape(-1, 4)).max(),
-             np.linalg.norm(a.velocity - b.velocity, axis=-1).max() / v_scale,
-             np.linalg.norm(a.angular_velocity - b.angular_velocity, axis=-1).max() / w_scale]
-    return float(max(parts))

@@ -19,8 +19,9 @@ from massprops.dynamics.precision import (
     PrecisionReport,
     PrecisionRun,
 )
-from massprops.dynamics.systems.methods import SYSTEM_INTEGRATORS, default_step, distance
+from massprops.dynamics.systems.methods import SYSTEM_INTEGRATORS, default_step
 from massprops.dynamics.systems.model import SystemScene
+from massprops.dynamics.systems.outputs import distance
 from massprops.dynamics.systems.run import prepare, simulate_system
 from massprops.errors import MassPropsError, UsageError
 

@@ -58,6 +58,7 @@ class System:
                              for s in scene.springs]
         self.rank: int | None = None  # of G at the start; a drop later is a singular pose
         self.margin = 1.0  # smallest σ_min / σ_max of G M^(-1/2) kept over the run so far
+        self.fastest_rate: float | None = None  # ρ(∂ẏ/∂y) at the start (systems.stiffness)
         self.time = 0.0
         self.program = build_program(self)  # the arrays the compiled step loop runs on
 
