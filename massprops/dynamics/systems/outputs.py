@@ -50,7 +50,7 @@ def body_states(system, y: np.ndarray):
         pos[s], vel[s] = kin.com, kin.V[:, 3:] + np.cross(kin.V[:, :3], kin.com)
         omega[s] = kin.V[:, :3]
         quat[s] = canonical(matrix_to_quat(kin.rotation))
-    return pos, quat, vel, omega
+    return pos + system.origin, quat, vel, omega
 
 
 def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples:
@@ -80,6 +80,8 @@ def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples
             for col in turns:
                 coords[k][:, col] = np.unwrap(coords[k][:, col])
     energy = np.array([system.energy(row) for row in y]) if with_energy else None
+    pos += system.origin  # back from the assembly's middle (assemble.localized)
+    points += system.origin
     return Samples(t, pos, quat, vel, omega, coords, rates, force, torque, energy, points)
 
 

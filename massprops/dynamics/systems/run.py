@@ -14,7 +14,7 @@ import numpy as np
 from massprops import tolerances
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
-from massprops.dynamics.systems.assemble import build_tree, initial_coordinates
+from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
 from massprops.dynamics.systems.integrate import MAX_STEPS, integrate
 from massprops.dynamics.systems.methods import (
     REASONS,
@@ -75,8 +75,9 @@ def _name(scene: SystemScene, i: int) -> str:
 
 def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
     """The System and its start y0 on the joints (refusals at the scene's lines), notes."""
+    scene, origin = localized(scene)  # about the assembly's middle, wherever it sits
     tree = build_tree(scene)
-    system = System(scene, tree)
+    system = System(scene, tree, origin)
     q, u, fixed_q, fixed_u = initial_coordinates(scene, tree)
     y0 = np.concatenate([q, u])
     notes: list[str] = []

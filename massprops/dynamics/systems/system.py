@@ -44,10 +44,13 @@ class Solution:
 
 
 class System:
-    """A scene's tree, loops and loads; ``rhs`` is the ODE ẏ = f(t, y), y = [q (nq), u (nv)]."""
+    """A scene's tree, loops and loads; ``rhs`` is the ODE ẏ = f(t, y), y = [q (nq), u (nv)].
+    ``scene`` and ``tree`` are about ``origin`` (3,) m world (`assemble.localized`): positions
+    and points the outputs give add it back."""
 
-    def __init__(self, scene: SystemScene, tree: Tree) -> None:
+    def __init__(self, scene: SystemScene, tree: Tree, origin: np.ndarray | None = None) -> None:
         self.scene, self.tree = scene, tree
+        self.origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=float)
         self.nq, self.nv, self.m = tree.nq, tree.nv, sum(p.rows for p in tree.prims)
         bodies = tree.bodies
         self.weights = np.array([b.mass * np.asarray(scene.gravity) for b in bodies])
