@@ -139,7 +139,8 @@ def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: 
              method: str) -> BaseException:
     """The exception of a kernel's failure ``status`` at fstats[3] (see systems_dop853)."""
     t = float(fstats[3])
-    loosen = "rtol" if method == "dop853" else "step"
+    fewer = (f"loosen {setting_ref('rtol')}" if method == "dop853"
+             else f"lengthen {setting_ref('step')}")
     if status == codes.UNDERFLOW:
         if method != "dop853":  # the fixed-step kernels' Newton failed in MAX_PIECES pieces
             return ArithmeticError(f"{method}'s Newton iterations failed at t = {t:.6g} s even "
@@ -153,7 +154,7 @@ def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: 
     if status == codes.STEP_LIMIT:
         return RunBudgetError(f"{system.scene.source}: the run took {max_steps} steps by "
                               f"t = {t:.6g} s, the run bound ({setting_ref('max_steps')}); "
-                              f"raise it or loosen {setting_ref(loosen)}")
+                              f"raise it or {fewer}")
     if status == codes.LINALG:
         return np.linalg.LinAlgError("Matrix is not positive definite")
     if status == codes.CROSSED:
