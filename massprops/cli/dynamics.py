@@ -99,9 +99,6 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
         from massprops.dynamics.compiled.compiling import whole_process
-        from massprops.dynamics.scene import load_scene
-        from massprops.dynamics.simulate import simulate as run_scene
-        from massprops.errors import DivergenceError, RunBudgetError
 
         if plot_path:
             # deferred: matplotlib (the plot extra) loads only for --plot
@@ -109,9 +106,15 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
 
             require_matplotlib()
         if _is_system(scene_path):  # `bodies:`, `model:` or a description: the systems package
+            whole_process()  # numba started lean: this process runs massprops alone
             _simulate_system(scene_path, as_json, output_path, integrator, rtol, step, every,
                              force, plot_path, duration, max_steps)
             return
+        # deferred: the one-body run's modules, not a system's
+        from massprops.dynamics.scene import load_scene
+        from massprops.dynamics.simulate import simulate as run_scene
+        from massprops.errors import DivergenceError, RunBudgetError
+
         scene = load_scene(scene_path)
         if duration is not None:
             scene = _one_body_duration(scene, scene_path, duration)
