@@ -86,7 +86,11 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
     k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp = scratch
     n = y.size
     rank0 = istats[6]
-    status = rhs(prog, ws, t0, y, fa, rank0, fstats)
+    # every load is on or off throughout a segment (segments end at the window edges), so the
+    # windows are judged at its middle: a stage on the end t1 must not see the next one's loads
+    # (Radau's last stage there made the slider-crank's drive end O(h) wrong: order 1)
+    tw = 0.5 * (t0 + t1)
+    status = rhs(prog, ws, tw, y, fa, rank0, fstats)
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, t0, y)
@@ -112,7 +116,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
             for p in range(pieces):
                 tp = ta + (tb - ta) * p / pieces
                 tq = tb if p == pieces - 1 else ta + (tb - ta) * (p + 1) / pieces
-                status = _step(prog, ws, scratch, arrays, method, tp, tq, rank0)
+                status = _step(prog, ws, scratch, arrays, method, tp, tq, tw, rank0)
                 if status != OK:
                     break
             if status != NEWTON_FAILED:
@@ -131,22 +135,22 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
 
 
 @array_inner
-def _step(prog, ws, scratch, arrays, method, ta, tb, rank0):
+def _step(prog, ws, scratch, arrays, method, ta, tb, tw, rank0):
     """One step of ``method`` from (ta, y, fa) to tb: y, fa become the projected end and its
     derivative, samples inside written; OK, NEWTON_FAILED (nothing changed), or a failure's
-    status (recorded)."""
+    status (recorded). Every evaluation judges the load windows at ``tw``."""
     y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail = arrays
     k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp = scratch
     n = y.size
     h = tb - ta
     if method == RK4:
-        status = _rk4(prog, ws, ta, h, y, fa, k, ytmp, ynew, rank0, fstats)
+        status = _rk4(prog, ws, tw, h, y, fa, k, ytmp, ynew, rank0, fstats)
         istats[1] += 3
     else:
-        status = _jacobian(prog, ws, ta, y, fa, scales, jac, ytmp, ftmp, rank0, fstats)
+        status = _jacobian(prog, ws, tw, y, fa, scales, jac, ytmp, ftmp, rank0, fstats)
         istats[1] += n
         if status == OK:
-            status, evals = _implicit(prog, ws, scratch, method, ta, h, y, scales, rank0, fstats)
+            status, evals = _implicit(prog, ws, scratch, method, tw, h, y, scales, rank0, fstats)
             istats[1] += evals
     if status == NEWTON_FAILED:
         return status
@@ -163,7 +167,7 @@ def _step(prog, ws, scratch, arrays, method, ta, tb, rank0):
     normalize(prog, ynew[:prog[0][0]])
     fstats[0] = max(fstats[0], moved[0])
     fstats[1] = max(fstats[1], moved[1])
-    status = rhs(prog, ws, tb, ynew, fb, rank0, fstats)
+    status = rhs(prog, ws, tw, ynew, fb, rank0, fstats)
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, tb, ynew)
@@ -190,14 +194,15 @@ def _step(prog, ws, scratch, arrays, method, ta, tb, rank0):
 
 
 @array_inner
-def _rk4(prog, ws, t, h, y, f0, k, ytmp, out, rank0, fstats):
-    """out = the classical RK4 step from (t, y), f0 = ẏ there; k[1:4] its other stages."""
+def _rk4(prog, ws, tw, h, y, f0, k, ytmp, out, rank0, fstats):
+    """out = the classical RK4 step of length h from y, f0 = ẏ there; k[1:4] its other stages
+    (loads judged at ``tw``)."""
     n = y.size
     for s in range(1, 4):
         c = 0.5 if s < 3 else 1.0
         for i in range(n):
             ytmp[i] = y[i] + c * h * (k[s - 1, i] if s > 1 else f0[i])
-        status = rhs(prog, ws, t + c * h, ytmp, k[s], rank0, fstats)
+        status = rhs(prog, ws, tw, ytmp, k[s], rank0, fstats)
         if status != OK:
             for i in range(n):
                 out[i] = ytmp[i]
@@ -208,11 +213,12 @@ def _rk4(prog, ws, t, h, y, f0, k, ytmp, out, rank0, fstats):
 
 
 @array_inner
-def _jacobian(prog, ws, t, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
-    """jac (n, n) = ∂ẏ/∂y at (t, y) by forward differences (f0 = ẏ there). The increment of
-    component j is √EPS × its error scale (floor and running max, ≥ |y_j|), rounded so that
-    y_j + δ − y_j is exactly δ: Hairer's √(EPS max(1e-5, |y_j|)) is 5e-11 for a rate at rest,
-    where a stiff spring's ẏ ~ 1e7 has round-off 1e-9, and the column came out as noise."""
+def _jacobian(prog, ws, tw, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
+    """jac (n, n) = ∂ẏ/∂y at y (loads at ``tw``) by forward differences (f0 = ẏ there). The
+    increment of component j is √EPS × its error scale (floor and running max, ≥ |y_j|),
+    rounded so that y_j + δ − y_j is exactly δ: Hairer's √(EPS max(1e-5, |y_j|)) is 5e-11 for
+    a rate at rest, where a stiff spring's ẏ ~ 1e7 has round-off 1e-9, and the column came out
+    as noise."""
     n = y.size
     for i in range(n):
         ytmp[i] = y[i]
@@ -220,7 +226,7 @@ def _jacobian(prog, ws, t, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
         yj = y[j]
         ytmp[j] = yj + math.sqrt(EPS) * max(scales[j], abs(yj))
         d = ytmp[j] - yj
-        status = rhs(prog, ws, t, ytmp, ftmp, rank0, fstats)
+        status = rhs(prog, ws, tw, ytmp, ftmp, rank0, fstats)
         ytmp[j] = yj
         if status != OK:
             return status
@@ -230,7 +236,7 @@ def _jacobian(prog, ws, t, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
 
 
 @array_inner
-def _implicit(prog, ws, scratch, method, t, h, y, scales, rank0, fstats):
+def _implicit(prog, ws, scratch, method, tw, h, y, scales, rank0, fstats):
     """ynew by simplified Newton on the stage equations: Radau IIA, Z (3, n) with
     Z − h (A ⊗ I) F(y + Z) = 0, ynew = y + Z_3; the midpoint rule, w = y1 − y with
     w − h f(t + h/2, y + w/2) = 0 (in z[0]). (status, evaluations)."""
@@ -254,10 +260,9 @@ def _implicit(prog, ws, scratch, method, t, h, y, scales, rank0, fstats):
     evals, eta, norm_old = 0, 1.0, math.inf
     for it in range(ITERATIONS):
         for s in range(st):  # the stage derivatives F(y + Z_s), in k[1:]
-            ts = t + h * (RADAU_C[s] if method == RADAU else 0.5)
             for i in range(n):
                 ytmp[i] = y[i] + (z[s, i] if method == RADAU else 0.5 * z[0, i])
-            status = rhs(prog, ws, ts, ytmp, k[1 + s], rank0, fstats)
+            status = rhs(prog, ws, tw, ytmp, k[1 + s], rank0, fstats)
             evals += 1
             if status == LINALG:  # an iterate gone wild: not the system's fault
                 return NEWTON_FAILED, evals
