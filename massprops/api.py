@@ -89,15 +89,11 @@ def load_scene(path: PathLike) -> Scene | SystemScene:
     runs (its stated inertials and base, gravity, 1 s from the zero pose at rest)."""
     # deferred: start-up
     from massprops.dynamics.scene import load_scene as load
-    from massprops.dynamics.systems.robot_scene import (
-        description_scene,
-        is_description,
-        load_any_system,
-    )
+    from massprops.dynamics.systems.robot_scene import is_description, load_any_system
     from massprops.dynamics.systems.scene import is_system_text
 
     if is_description(path):
-        return description_scene(path)
+        return load_any_system(path)
     try:
         with open(path, encoding="utf-8-sig") as handle:
             system = is_system_text(handle.read())

@@ -213,3 +213,15 @@ def test_orders_hold_across_a_load_window():
                                        estimate=False).samples, ref.samples, scene.size)
               for h in (0.002, 0.001)]
     assert math.log2(errors[0] / errors[1]) > 4.5, errors
+
+
+def test_cli_precision_on_a_robot_description(run):
+    """`precision ROBOT.urdf` runs the description as `simulate ROBOT` does (1 s from the zero
+    pose); it was read as a YAML scene and refused with the file's whole text."""
+    import json
+
+    result = run("precision", SAMPLES / "robot_arm.urdf", "--integrator", "dop853", "--json")
+    assert result.exit_code == 0, result.stderr
+    runs = json.loads(result.stdout)["runs"]
+    assert {r["integrator"] for r in runs} == {"dop853"} and len(runs) >= 4
+    assert runs[-1]["error"] < 1e-3 * runs[0]["error"]  # the ladder converges

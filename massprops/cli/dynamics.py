@@ -253,20 +253,10 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     """A system scene or a robot description: run, write the trajectory, print JSON or a short
     summary."""
     # deferred, as the one-body path's imports: only a system scene needs them
-    from massprops.dynamics.systems.robot_scene import (
-        description_scene,
-        is_description,
-        load_any_system,
-    )
+    from massprops.dynamics.systems.robot_scene import load_any_system
     from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
-    from massprops.dynamics.systems.scene import with_time
 
-    if is_description(scene_path):
-        scene = description_scene(scene_path, duration=1.0 if duration is None else duration)
-    else:
-        scene = load_any_system(scene_path)
-        if duration is not None:
-            scene = with_time(scene, duration=duration)
+    scene = load_any_system(scene_path, duration)
     for w in scene.warnings:
         say_warning(scene_path, w)
     out = output_path or scene.output.file

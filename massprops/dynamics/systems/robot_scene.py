@@ -33,7 +33,7 @@ from massprops.dynamics.systems.description import (
     describe,
 )
 from massprops.dynamics.systems.model import SystemInitial, SystemScene
-from massprops.dynamics.systems.scene import _forces, _initial, parse_system
+from massprops.dynamics.systems.scene import _forces, _initial, parse_system, with_time
 from massprops.dynamics.yamlnodes import Field, compose, read_choice, read_mapping, read_string
 from massprops.errors import SceneError
 
@@ -50,16 +50,22 @@ def is_description(path: str | os.PathLike) -> bool:
     return Path(path).suffix.lower() in DESCRIPTION_SUFFIXES
 
 
-def load_any_system(path: str | os.PathLike) -> SystemScene:
-    """A system scene file: ``bodies:`` or ``model:`` (SceneError / RobotModelError, one line)."""
+def load_any_system(path: str | os.PathLike, duration: float | None = None) -> SystemScene:
+    """A system scene file (``bodies:`` or ``model:``) or a robot description
+    (`description_scene`), with its duration set to ``duration`` s where given (a
+    description's default: 1 s). SceneError / RobotModelError, one line."""
+    if is_description(path):
+        return description_scene(path, duration=1.0 if duration is None else duration)
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except OSError as exc:
         raise SceneError(f"{path}: cannot read the scene file: {exc.strerror}") from exc
     if any(line.startswith("model:") for line in text.splitlines()):
-        return parse_model_scene(text, source=os.fspath(path), base_dir=path.parent)
-    return parse_system(text, source=os.fspath(path), base_dir=path.parent)
+        scene = parse_model_scene(text, source=os.fspath(path), base_dir=path.parent)
+    else:
+        scene = parse_system(text, source=os.fspath(path), base_dir=path.parent)
+    return scene if duration is None else with_time(scene, duration=duration)
 
 
 def parse_model_scene(text: str, *, source: str, base_dir: Path) -> SystemScene:
