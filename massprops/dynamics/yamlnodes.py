@@ -120,8 +120,9 @@ def shown(node: yaml.Node) -> str:
         return "a mapping"
     if node.tag == _NULL:
         return "nothing (null)"
-    if node.tag == _STR:
-        return repr(node.value)
+    if node.tag == _STR:  # a whole file read as one string (XML, a log) must not fill the line
+        text = repr(node.value)
+        return text if len(text) <= 60 else text[:56] + "...'"
     if node.tag == _BOOL:
         return f"{node.value} (a boolean)"
     return node.value if len(node.value) <= 40 else node.value[:37] + "..."
