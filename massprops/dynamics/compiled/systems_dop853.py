@@ -240,7 +240,7 @@ def warm_up() -> None:
             np.array([[0.0, 0.0, -0.5]]), np.array([[0.0, 0.0, -9.81]]), np.zeros((0, 4), ints),
             np.zeros((0, 13)), np.zeros((0, 4), ints), np.zeros((0, 8)), np.zeros((0, 2), ints),
             np.zeros((0, 9)), np.zeros(0, ints), np.zeros((0, 6)),
-            np.array([1.0, 1e-8, 1e-14, 1e-6]))
+            np.array([1.0, 1e-8, 1e-14, 1e-6]), np.zeros((0, 3), ints), np.zeros((0, 21)))
     y = np.array([0.1, 0.0])
     run_segment(prog, y, 0.0, 1e-3, 1e-6, np.ones(2), np.array([0.0, 1e-3]), np.zeros((2, 2)),
                 np.array([0, 0, 0, OK, 1, -1, -1], ints),
