@@ -17,7 +17,8 @@ from massprops.dynamics.compiled.systems_step import rhs, workspace
 from massprops.dynamics.systems import tree as tr
 from massprops.dynamics.systems.assemble import build_tree
 from massprops.dynamics.systems.run import prepare, simulate_system
-from massprops.dynamics.systems.scene import parse_system
+from massprops.dynamics.systems.scene import load_system, parse_system
+from massprops.errors import SceneError
 from massprops.rotation import quat_to_matrix, rotation_angle_between
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_scenes"
@@ -217,3 +218,27 @@ def test_compiled_right_hand_side_with_cut_loads_equals_numpy(case):
             assert rhs(system.program, ws, t, y, got, -1, np.array([0, 0, 1.0, 0, 0, 0])) == 0
             scale = max(1.0, float(np.abs(want).max()))
             assert np.abs(got - want).max() <= 1e-11 * scale
+
+
+@pytest.mark.parametrize(("sample", "cut"), [("four_bar", ["C"]), ("slider_crank", ["C"]),
+                                             ("andrews", ["E3", "E4", "E6"])])
+def test_the_samples_keep_their_cut_joints(sample, cut):
+    """Nothing named or loaded sits on a breadth-first cut in the samples (slider-crank's drive
+    and Andrews' drive are on tree joints): the cut, and so every result, is as before."""
+    assert _cut(load_system(SAMPLES / f"{sample}.yaml")) == cut
+
+
+def test_a_named_or_loaded_joint_is_kept_in_the_tree_where_the_loop_allows():
+    # a start named on the breadth-first cut C: exchanged for D (the last unnamed, unloaded)
+    scene = parse_system(FOUR_BAR.format(A="", B="", C="", D="", forces="", duration=0.1)
+                         .replace("rates: {A: 2.0}", "positions: {C: 0.01}\n  rates: {A: 2.0}"),
+                         source="t.yaml", base_dir=SAMPLES)
+    assert _cut(scene) == ["D"]
+    # a named joint may push a loaded one onto the cut; an unloaded one goes first
+    assert _cut(_four_bar(C="damping: 0.1", D="damping: 0.1")) == ["B"]
+    assert _cut(_four_bar(B="damping: 0.1", C="damping: 0.1", D="damping: 0.1")) == ["C"]
+    # every joint of the loop named: the cut one's start cannot be kept
+    every = FOUR_BAR.format(A="", B="", C="", D="", forces="", duration=0.1).replace(
+        "rates: {A: 2.0}", "rates: {A: 2.0, B: 0.0, C: 0.0, D: 0.0}")
+    with pytest.raises(SceneError, match=r"t\.yaml:\d+: initial\.rates\.C: .*closes a loop"):
+        build_tree(parse_system(every, source="t.yaml", base_dir=SAMPLES))
