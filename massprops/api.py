@@ -111,8 +111,8 @@ def simulate(scene: Scene | SystemScene | PathLike,
     """Integrate the Newton-Euler equations of a scene (a `Scene` or its file): a
     `SimulationResult` (``final``, ``diagnostics``, ``trajectory``; ``as_dict()`` is the
     ``simulate --json`` object). ``options``: integrator, rtol, step, every, max_steps. A
-    system (a `SystemScene`) gives a `SystemResult` (the same keys, per body and joint);
-    its ``options``: integrator, rtol, every, max_steps."""
+    system (a `SystemScene`) gives a `SystemResult` (the same keys, per body and joint),
+    with the same ``options``."""
     # deferred: start-up
     from massprops.dynamics.simulate import simulate as run
     from massprops.dynamics.systems.model import SystemScene
@@ -120,13 +120,6 @@ def simulate(scene: Scene | SystemScene | PathLike,
 
     scene = scene if _is_scene(scene) else load_scene(scene)
     if isinstance(scene, SystemScene):
-        if options.get("step") is not None:
-            # deferred: start-up
-            from massprops.errors import UsageError
-
-            raise UsageError(f"{scene.source}: step sets a fixed-step integrator's step; a "
-                             "system runs with its adaptive DOP853: set rtol")
-        options.pop("step", None)
         return simulate_system(scene, **options)
     return run(scene, **options)
 

@@ -141,7 +141,7 @@ def test_energy_conserved_double_pendulum():
 @pytest.mark.slow
 def test_convergence_order_and_estimate():
     scene = with_time(load_system(SAMPLES / "double_pendulum.yaml"), duration=2.0)
-    from massprops.dynamics.systems.run import distance
+    from massprops.dynamics.systems.outputs import distance
 
     ref = simulate_system(scene, rtol=1e-13, every=0.1, estimate=False).samples
     steps, errors = [], []
@@ -181,7 +181,7 @@ def test_one_link_system_equals_one_body_joint():
     assert np.max(np.abs(sys_run.force[:, 0] - force)) < 1e-6 * np.max(np.abs(force))
 
 
-@pytest.mark.slow  # eight rungs and a reference, ~5 s
+@pytest.mark.slow  # four ladders and a reference, ~10 s
 def test_precision_ladder_on_a_system():
     from massprops.dynamics.systems.precision import precision_system
 
@@ -189,11 +189,12 @@ def test_precision_ladder_on_a_system():
     report = precision_system(scene).as_dict()
     assert report["reference"]["kind"] == "run" and report["reference"]["accuracy"] < 1e-11
     runs = report["runs"]
-    assert len(runs) >= 4 and {"integrator", "setting", "wall_time_s", "error",
-                                "steps"} <= set(runs[0])
+    assert {"integrator", "setting", "wall_time_s", "error", "steps"} <= set(runs[0])
     for run in runs:  # the estimate is honest on every rung: true error within 10x of it
         assert run["error"] < 10 * run["error_estimate"] + 3 * report["reference"]["accuracy"]
-    assert runs[-1]["error"] < 1e-3 * runs[0]["error"]
+    for name in ("dop853", "rk4", "midpoint", "implicit"):  # each ladder converges
+        ladder = [r["error"] for r in runs if r["integrator"] == name]
+        assert len(ladder) >= 3 and ladder[-1] < 1e-3 * ladder[0], (name, ladder)
 
 
 @pytest.mark.slow  # ~8 s: 7 bodies, 3 loops, a stiff spring, in plain numpy

@@ -92,15 +92,6 @@ def test_cli_refusal_is_one_line_exit_1(tmp_path):
     assert "Traceback" not in done.stderr
 
 
-def test_cli_step_is_refused_not_ignored(tmp_path, run):
-    """A system has no fixed-step method: --step is said to be inapplicable, exit 2."""
-    path = tmp_path / "good.yaml"
-    path.write_text(GOOD)
-    result = run("simulate", path, "--step", "0.01")
-    assert result.exit_code == 2 and result.stdout == ""
-    assert "--step" in result.stderr and "--rtol" in result.stderr
-
-
 @pytest.mark.slow  # a fresh process: imports, the run and its error-estimate companion
 def test_cli_json_contract(tmp_path):
     path = tmp_path / "dp.yaml"

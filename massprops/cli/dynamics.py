@@ -99,9 +99,6 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
         from massprops.dynamics.compiled.compiling import whole_process
-        from massprops.dynamics.scene import load_scene
-        from massprops.dynamics.simulate import simulate as run_scene
-        from massprops.errors import DivergenceError, RunBudgetError
 
         if plot_path:
             # deferred: matplotlib (the plot extra) loads only for --plot
@@ -109,15 +106,15 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
 
             require_matplotlib()
         if _is_system(scene_path):  # `bodies:`, `model:` or a description: the systems package
-            if step is not None:  # said, not ignored: systems have no fixed-step method yet
-                from massprops.errors import UsageError, setting_ref  # deferred: rare path
-
-                raise UsageError(f"{scene_path}: {setting_ref('step')} sets a fixed-step "
-                                 "integrator's step; a system runs with its adaptive DOP853: "
-                                 f"set its accuracy with {setting_ref('rtol')}")
-            _simulate_system(scene_path, as_json, output_path, integrator, rtol, every, force,
-                             plot_path, duration, max_steps)
+            whole_process()  # numba started lean: this process runs massprops alone
+            _simulate_system(scene_path, as_json, output_path, integrator, rtol, step, every,
+                             force, plot_path, duration, max_steps)
             return
+        # deferred: the one-body run's modules, not a system's
+        from massprops.dynamics.scene import load_scene
+        from massprops.dynamics.simulate import simulate as run_scene
+        from massprops.errors import DivergenceError, RunBudgetError
+
         scene = load_scene(scene_path)
         if duration is not None:
             scene = _one_body_duration(scene, scene_path, duration)
@@ -188,16 +185,14 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
             from massprops.dynamics.plots import require_matplotlib
 
             require_matplotlib()
-        if _is_system(scene_path):  # a `bodies:` scene: the systems package's own ladder
+        if _is_system(scene_path):  # a `bodies:` scene: the systems package's own ladders
             # deferred: only a system scene needs them
-            from massprops.dynamics.systems.precision import precision_system
+            from massprops.dynamics.systems.precision import precision_system as run_ladders
             from massprops.dynamics.systems.robot_scene import load_any_system
 
             scene = load_any_system(scene_path)
-            report = precision_system(scene)
-            _emit_precision(report, scene_path, plot_path, as_json, force, scene.input_files)
-            return
-        scene = load_scene(scene_path)
+        else:
+            scene = load_scene(scene_path)
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
         whole_process()
         try:
@@ -205,19 +200,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
                                  progress=progress, notice=say_note)
         finally:
             progress.close()
-        if plot_path:
-            # deferred: matplotlib (the plot extra) loads only for --plot
-            from massprops.dynamics.plots import plot_precision
-
-            plot_precision(report, plot_path, title=scene_path, force=force,
-                           protect=[scene_path, *scene.input_files])
-        if as_json:
-            emit_json(report.as_dict())
-        else:
-            # deferred: rich loads only for human-readable output
-            from massprops.cli.report import print_precision
-
-            print_precision(scene_path, report)
+        _emit_precision(report, scene_path, plot_path, as_json, force, scene.input_files)
 
     ctx.exit(guarded(ctx, run))
 
@@ -264,8 +247,8 @@ def _is_system(scene_path: str) -> bool:
 
 
 def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
-                     integrator: str | None, rtol: float | None, every: float | None,
-                     force: bool, plot_path: str | None = None,
+                     integrator: str | None, rtol: float | None, step: float | None,
+                     every: float | None, force: bool, plot_path: str | None = None,
                      duration: float | None = None, max_steps: int | None = None) -> None:
     """A system scene or a robot description: run, write the trajectory, print JSON or a short
     summary."""
@@ -290,7 +273,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     sampling = every or scene.output.every
     if sampling is None and (out or plot_path):
         sampling = scene.time.duration / 1000
-    result = simulate_system(scene, integrator=integrator, rtol=rtol, every=sampling,
+    result = simulate_system(scene, integrator=integrator, rtol=rtol, step=step, every=sampling,
                              notice=say_note, max_steps=max_steps)
     for note in result.notes:
         click.echo(f"massprops: warning: {note}", err=True)
@@ -317,7 +300,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
 
 def _emit_precision(report: Any, scene_path: str, plot_path: str | None, as_json: bool,
                     force: bool, inputs: Any) -> None:
-    """A system's precision report, as the one-body command shows it."""
+    """A precision report: the plot, then JSON or the table."""
     if plot_path:
         # deferred: matplotlib (the plot extra) loads only for --plot
         from massprops.dynamics.plots import plot_precision

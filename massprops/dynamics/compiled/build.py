@@ -27,13 +27,13 @@ from massprops.dynamics.integrators import INTEGRATORS
 
 def build(names: list[str] | None = None, jobs: int = 2) -> int:
     """Compile the kernels of the integrators ``names`` (default: every stepping one and the
-    systems' step loop, `compiling.SYSTEMS`) of the package this module is in and store them
-    in `FOLDER`; returns the number of files.
+    systems' kernel, `compiling.SYSTEMS`) of the package this module is in and store
+    them in `FOLDER`; returns the number of files.
     ``jobs`` processes compile side by side (one kernel is one process's work)."""
     kernels = compiling.compiled_names(names or [*INTEGRATORS, compiling.SYSTEMS])
     scratch = Path(tempfile.mkdtemp(prefix="massprops-prebuild-"))
     try:
-        shares = compiling.balanced(kernels, jobs)  # the systems' kernel alone takes ~65 s
+        shares = compiling.balanced(kernels, jobs)  # the systems' kernel alone takes ~75 s
         env = dict(os.environ, NUMBA_CACHE_DIR=str(scratch),
                    PYTHONPATH=os.pathsep.join([str(PACKAGE.parent),
                                                os.environ.get("PYTHONPATH", "")]))

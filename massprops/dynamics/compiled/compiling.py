@@ -34,14 +34,14 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 COMPILE_SECONDS = {"rk4": 2.0, "dop853": 3.0, "implicit": 8.0, "midpoint": 5.0,
-                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0, "systems": 65.0}
+                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0, "systems": 75.0}
 """About how long (s, one idle core) compiling each method's kernels takes from an empty cache,
 from benchmarks/bench_first_run.py; only for the notice's estimate. The three splitting methods
 share one kernel."""
 
 SYSTEMS = "systems"
-"""The name of the systems' step loop (`systems_dop853`), prepared like an integrator's kernel
-(systems of bodies run only with it)."""
+"""The name of the systems' one kernel (`systems_kernel.run_segment`: every method a system
+runs with), prepared like an integrator's kernel."""
 
 SHARED_KERNEL = {"splitting4": "splitting", "splitting6": "splitting"}
 """Methods whose compiled kernel is another's (compiling one compiles both)."""
@@ -126,7 +126,7 @@ def warm_up(name: str) -> None:
     types of every real run (so the call loads or compiles the very kernel the runs use)."""
     if name == SYSTEMS:
         # deferred: the systems' kernels, needed only when preparing them
-        from massprops.dynamics.compiled.systems_dop853 import warm_up as warm_up_systems
+        from massprops.dynamics.compiled.systems_kernel import warm_up as warm_up_systems
 
         warm_up_systems()
         return

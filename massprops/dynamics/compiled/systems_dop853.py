@@ -1,4 +1,5 @@
-"""DOP853 over a system's y = [q, u], compiled: the whole step loop of one segment in one call.
+"""DOP853 over a system's y = [q, u], compiled: the whole step loop of one segment, called by
+the systems' one compiled entry (`systems_kernel.run_segment`).
 
 The method of `dynamics.systems.integrate` (the project's tableau, dop853.f's error norm and step
 control): after each accepted step the quaternions are renormalised and (q, u) projected onto
@@ -20,7 +21,7 @@ import math
 
 import numpy as np
 
-from massprops.dynamics.compiled.jit import array_inner, array_kernel
+from massprops.dynamics.compiled.jit import array_inner, inlined
 from massprops.dynamics.compiled.systems_step import (
     CROSSED,
     OK,
@@ -30,9 +31,7 @@ from massprops.dynamics.compiled.systems_step import (
     normalize,
     project,
     rhs,
-    workspace,
 )
-from massprops.dynamics.compiled.unowned import unowned
 from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, C, D
 
 E3 = B - BHH
@@ -52,40 +51,39 @@ def _stage(y, h, k, s, out):
 
 
 @array_inner
-def _fail(istats, fstats, yfail, status, t, y):
+def fail(istats, fstats, yfail, status, t, y):
     istats[3] = status
     fstats[3] = t
     for i in range(y.size):
         yfail[i] = y[i]
 
 
-@array_kernel
-def run_segment(prog, y, t0, t1, rtol, scales, t_out, y_out, istats, fstats, acc_b, acc_u,
-                max_steps, yfail):
-    """Integrate y (in place) from t0 to t1; samples at t_out[istats[4]:] into y_out."""
-    ws = workspace(prog)
-    n = y.size
-    scratch = (np.empty((16, n)), np.empty(n), np.empty(n), np.empty((8, n)), np.zeros(3))
-    arrays = (y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail)
-    _segment(unowned(prog), unowned(ws), unowned(scratch), unowned(arrays), t0, t1, rtol,
-             max_steps, (prog, ws, scratch, arrays))  # the last keeps the owners alive
+@inlined
+def scratch(n):
+    """The step loop's own arrays for a state of n entries (`segment`'s ``scratch``)."""
+    return (np.empty((16, n)), np.empty(n), np.empty(n), np.empty((8, n)), np.zeros(3))
 
 
 @array_inner
-def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
-    """run_segment's loop, on views numba does not reference-count (`unowned`)."""
+def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
+    """Integrate arrays' y (in place) from t0 to t1 at ``rtol``, samples at
+    t_out[istats[4]:] into y_out (`systems_kernel.run_segment` gives the arguments; the arrays
+    are views numba does not reference-count, `unowned`)."""
     y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail = arrays
     k, ytmp, ynew, cont, moved = scratch
     n = y.size
     rank0 = istats[6]
-    status = rhs(prog, ws, t0, y, k[0], rank0, fstats)
+    # every load is on or off throughout a segment (segments end at the window edges), so the
+    # windows are judged at its middle: a stage on the end t1 must not see the next one's loads
+    tw = 0.5 * (t0 + t1)
+    status = rhs(prog, ws, tw, y, k[0], rank0, fstats)
     istats[1] += 1
     if status != OK:
-        _fail(istats, fstats, yfail, status, t0, y)
+        fail(istats, fstats, yfail, status, t0, y)
         return
     if accept(prog, ws, acc_b, acc_u, istats, fstats, t0) == CROSSED:  # starts at the pose
         fstats[4] = t0
-        _fail(istats, fstats, yfail, CROSSED, t0, y)
+        fail(istats, fstats, yfail, CROSSED, t0, y)
         return
     hmax = t1 - t0
     # the initial step (Hairer's HINIT)
@@ -98,10 +96,10 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
     h = min(h, hmax)
     for i in range(n):
         ytmp[i] = y[i] + h * k[0, i]
-    status = rhs(prog, ws, t0 + h, ytmp, k[1], rank0, fstats)
+    status = rhs(prog, ws, tw, ytmp, k[1], rank0, fstats)
     istats[1] += 1
     if status != OK:
-        _fail(istats, fstats, yfail, status, t0 + h, ytmp)
+        fail(istats, fstats, yfail, status, t0 + h, ytmp)
         return
     der2 = 0.0
     for i in range(n):
@@ -118,18 +116,18 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
         if last:
             h = t1 - t
         if h <= 1e-14 * max(abs(t), t1):
-            _fail(istats, fstats, yfail, UNDERFLOW, t, y)
+            fail(istats, fstats, yfail, UNDERFLOW, t, y)
             return
         if istats[0] >= max_steps:
-            _fail(istats, fstats, yfail, STEP_LIMIT, t, y)
+            fail(istats, fstats, yfail, STEP_LIMIT, t, y)
             return
         for s in range(1, 12):
             _stage(y, h, k, s, ytmp)
             t_last = t + h * C[s]
-            status = rhs(prog, ws, t_last, ytmp, k[s], rank0, fstats)
+            status = rhs(prog, ws, tw, ytmp, k[s], rank0, fstats)
             if status != OK:
                 istats[1] += s
-                _fail(istats, fstats, yfail, status, t_last, ytmp)
+                fail(istats, fstats, yfail, status, t_last, ytmp)
                 return
         istats[1] += 11
         err5 = err3 = 0.0
@@ -154,29 +152,29 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
             status = project(prog, ws, ynew, PROJECT_ITERATIONS, moved)
             if status != OK:
                 fstats[5] = moved[2]
-                _fail(istats, fstats, yfail, status, t_last, ynew)
+                fail(istats, fstats, yfail, status, t_last, ynew)
                 return
             normalize(prog, ynew[:prog[0][0]])
             fstats[0] = max(fstats[0], moved[0])
             fstats[1] = max(fstats[1], moved[1])
             t_last = t_new
-            status = rhs(prog, ws, t_new, ynew, k[12], rank0, fstats)
+            status = rhs(prog, ws, tw, ynew, k[12], rank0, fstats)
             istats[1] += 1
             if status != OK:
-                _fail(istats, fstats, yfail, status, t_new, ynew)
+                fail(istats, fstats, yfail, status, t_new, ynew)
                 return
             if accept(prog, ws, acc_b, acc_u, istats, fstats, t_new) == CROSSED:
                 fstats[4] = t if fstats[6] > prog[20][3] else t_new  # at t_new: reached it
-                _fail(istats, fstats, yfail, CROSSED, t_new, ynew)
+                fail(istats, fstats, yfail, CROSSED, t_new, ynew)
                 return
             kout = istats[4]
             if kout < nout and t_out[kout] <= t_new:
                 for s in range(13, 16):
                     _stage(y, h, k, s, ytmp)
                     t_last = t + h * C[s]
-                    status = rhs(prog, ws, t_last, ytmp, k[s], rank0, fstats)
+                    status = rhs(prog, ws, tw, ytmp, k[s], rank0, fstats)
                     if status != OK:
-                        _fail(istats, fstats, yfail, status, t_last, ytmp)
+                        fail(istats, fstats, yfail, status, t_last, ytmp)
                         return
                 istats[1] += 3
                 _dense(y, ynew, h, k, cont)
@@ -186,7 +184,7 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
                     status = project(prog, ws, row, PROJECT_ITERATIONS, moved)
                     if status != OK:
                         fstats[5] = moved[2]
-                        _fail(istats, fstats, yfail, status, t_last, row)
+                        fail(istats, fstats, yfail, status, t_last, row)
                         return
                     kout += 1
                 istats[4] = kout
@@ -227,22 +225,3 @@ def _dense_row(cont, s, out):
     for i in range(out.size):
         par = cont[4, i] + s * (cont[5, i] + s1 * (cont[6, i] + s * cont[7, i]))
         out[i] = cont[0, i] + s * (cont[1, i] + s1 * (cont[2, i] + s * (cont[3, i] + s1 * par)))
-
-
-def warm_up() -> None:
-    """Run one short segment of a stand-in system (a rod on a hinge, no loops) whose arrays have
-    the types of every real program, so the call loads or compiles the kernel runs use."""
-    ints = np.int64
-    prog = (np.array([1, 1, 0, 1, 1], ints), np.array([[1, -1, 0, 0, 0, 1, 1, 0]], ints),
-            np.array([[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]]), np.zeros((1, 3)),
-            np.array([[0.0, 0.0, 0.5]]), np.eye(3).reshape(1, 3, 3), np.zeros(1, ints),
-            np.ones(1), np.eye(3).reshape(1, 3, 3), np.eye(3).reshape(1, 3, 3),
-            np.array([[0.0, 0.0, -0.5]]), np.array([[0.0, 0.0, -9.81]]), np.zeros((0, 4), ints),
-            np.zeros((0, 13)), np.zeros((0, 4), ints), np.zeros((0, 8)), np.zeros((0, 2), ints),
-            np.zeros((0, 9)), np.zeros(0, ints), np.zeros((0, 6)),
-            np.array([1.0, 1e-8, 1e-14, 1e-6]), np.zeros((0, 3), ints), np.zeros((0, 21)))
-    y = np.array([0.1, 0.0])
-    run_segment(prog, y, 0.0, 1e-3, 1e-6, np.ones(2), np.array([0.0, 1e-3]), np.zeros((2, 2)),
-                np.array([0, 0, 0, OK, 1, -1, -1], ints),
-                np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]),
-                np.zeros((0, 1)), np.zeros((0, 1)), 1000, np.zeros(2))

@@ -6,7 +6,7 @@ function that calls another keeps an increment and a decrement for every array i
 of 21 arrays and a workspace of ~40 down through a dozen calls per right-hand side: measured,
 that bookkeeping took ~90 % of an evaluation (1.3 µs of a 2-body `applied` that computes for
 15 ns). A view with no meminfo makes each count a null test. The caller must keep the owned
-arrays alive while the views are used (pass them along, as `systems_dop853.run_segment` does).
+arrays alive while the views are used (pass them along, as `systems_kernel.run_segment` does).
 """
 
 from __future__ import annotations

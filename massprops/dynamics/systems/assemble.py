@@ -16,6 +16,7 @@ Every refusal names the scene's file, line and key.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -44,6 +45,36 @@ class Tree:
     size: float
     loaded: list = field(default_factory=list)  # tree joint indices with springs/drives
     cut_loaded: list = field(default_factory=list)  # indices into ``cut`` with springs/drives
+
+
+def localized(scene: SystemScene) -> tuple[SystemScene, np.ndarray]:
+    """(``scene`` moved by −o, o): o (3,) m world is the middle of the box around the bodies'
+    centres of mass and the joints' points, so that the moved assembly sits about the origin.
+
+    The engine's spatial vectors and inertias are world-frame about the origin (`tree`): an
+    assembly d away from it keeps a body's inertia only to (d / size)² × eps (the parallel-axis
+    term m d² swamps it) and its velocities to (d / size) × eps (v_O = v − ω × c). The double
+    pendulum 1e3 m away ended 2.6e-9 rad off after 2 s and 1e6 m away took two million steps
+    for 5 ms; about its own middle it is the same run wherever it sits. Gravity, directions,
+    velocities and joint coordinates are unchanged by the move; positions and points out of
+    the run get o back (`outputs`)."""
+    points = [b.com0 for b in scene.bodies] + [j.point for j in scene.joints
+                                               if j.point is not None]
+    origin = 0.5 * (np.min(points, axis=0) + np.max(points, axis=0))
+    if not origin.any():
+        return scene, origin
+
+    def moved(p):
+        return None if p is None else p - origin
+
+    return dataclasses.replace(
+        scene,
+        bodies=tuple(dataclasses.replace(b, com0=b.com0 - origin) for b in scene.bodies),
+        joints=tuple(dataclasses.replace(j, point=moved(j.point), points=moved(j.points))
+                     for j in scene.joints),
+        forces=tuple(dataclasses.replace(f, point=moved(f.point)) for f in scene.forces),
+        springs=tuple(dataclasses.replace(s, points=moved(s.points)) for s in scene.springs),
+    ), origin
 
 
 def _priority(scene: SystemScene, k: int) -> int:

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.dynamics.systems.assemble import build_tree, initial_coordinates
+from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
 from massprops.dynamics.systems.model import WORLD, SystemBody, SystemJoint
 from massprops.dynamics.systems.tree import kinematics, mass_matrix
 from massprops.errors import RobotModelError
@@ -240,6 +240,7 @@ def check_mass_matrix(scene) -> None:
     """RobotModelError (one line) when the mass matrix at the start (the engine's own assembly
     and CRBA, as the run will use them) is singular: some joint motion moves no mass and no
     inertia (two joints on one axis with a massless link between)."""
+    scene, _ = localized(scene)  # about its middle: M's smallest eigenvalue kept wherever it is
     tree = build_tree(scene)
     if tree.nv == 0:
         return

@@ -1,12 +1,15 @@
-"""DOP853 for systems, with a projection after every step and 7th-order dense output: one
-compiled call per segment (`dynamics.compiled.systems_dop853.run_segment`) over the system's
-arrays (`program`).
+"""The integrators of systems, with a projection after every step: DOP853 with its 7th-order
+dense output (`dynamics.compiled.systems_dop853`), and the registry's fixed-step methods rk4,
+midpoint and implicit (`dynamics.compiled.systems_fixed`, Hermite dense output): one compiled
+call per segment (`dynamics.compiled.systems_kernel.run_segment`) over the system's arrays
+(`program`).
 
 The registry's kernels cannot take a system (see DESIGN.md, "Systems of bodies"): they are
 compiled around the one-body state y = [r, v, q, ω] (13 or 7 entries, a quaternion at a fixed
-offset, error blocks by that layout) and call ``forces.rhs`` with the force table. This is the
-same method (the project's own tableau, dop853.f's error norm and step control) over
-y = [q, u] of any length: after each accepted step the quaternion coordinates are renormalised
+offset, error blocks by that layout) and call ``forces.rhs`` with the force table. These are
+the same methods (DOP853: the project's own tableau, dop853.f's error norm and step control;
+the fixed-step ones: the same stages and Newton rule) over y = [q, u] of any length: after each
+accepted step the quaternion coordinates are renormalised
 and (q, u) projected onto Φ = 0, Φ̇ = 0 (the compiled form of System.project); the dense output
 of a step is built from its start and its projected end, and each sample is projected in turn.
 The error scale of component i is rtol × max(running max |y_i|, floor_i). A failure in the
@@ -18,7 +21,9 @@ from __future__ import annotations
 import numpy as np
 
 from massprops.dynamics.compiled import systems_step as codes
-from massprops.dynamics.compiled.systems_dop853 import PROJECT_ITERATIONS, run_segment
+from massprops.dynamics.compiled.systems_dop853 import PROJECT_ITERATIONS
+from massprops.dynamics.compiled.systems_fixed import DIVERGED, MAX_PIECES
+from massprops.dynamics.compiled.systems_kernel import DOP853, METHODS, run_segment
 from massprops.dynamics.systems.system import SingularPose
 from massprops.errors import RunBudgetError, setting_ref
 
@@ -48,9 +53,10 @@ class Run:
         self.t_reached = 0.0
 
 
-def integrate(system, y0: np.ndarray, t_out: np.ndarray, rtol: float, floors: np.ndarray,
-              windows: np.ndarray, max_steps: int = MAX_STEPS) -> Run:
-    """Integrate from t = 0 over [0, t_out[-1]], stepping onto each window edge in ``windows``
+def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors: np.ndarray,
+              windows: np.ndarray, max_steps: int = MAX_STEPS, method: str = "dop853") -> Run:
+    """Integrate from t = 0 over [0, t_out[-1]] with ``method`` (dop853: ``setting`` is rtol;
+    rk4, midpoint, implicit: the step h, s), stepping onto each window edge in ``windows``
     (sorted times where the loads jump). A singular pose, a failed projection, a step-size
     underflow or the step limit stops the run: ``Run.failure`` holds it and the samples before
     it are kept. ``system.margin`` becomes this run's singularity margin."""
@@ -71,13 +77,19 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, rtol: float, floors: np
     yfail = np.zeros(y.size)
     for t0, t1 in zip(edges[:-1], edges[1:]):
         within = scales.copy()  # each segment's error scales start from y0's running maxima
-        run_segment(system.program, y, t0, t1, float(rtol), within, t_out, run.y_out, istats,
-                    fstats, accepted_b, accepted_u, max_steps, yfail)
+        run_segment(system.program, y, t0, t1, float(setting), METHODS[method], within, t_out,
+                    run.y_out, istats, fstats, accepted_b, accepted_u, max_steps, yfail)
         if istats[3] != codes.OK:
+            run.failure = None
             if istats[3] == codes.CROSSED and fstats[4] < fstats[3]:  # a step jumped across it
-                fstats[4], fstats[3] = _narrow(system, y, float(fstats[4]), float(fstats[3]),
-                                               rtol, scales, floors)
-            run.failure = _failure(system, int(istats[3]), fstats, yfail, max_steps)
+                rtol = float(setting) if method == "dop853" else NARROW_RTOL
+                low, high, seen = _narrow(system, y, float(fstats[4]), float(fstats[3]), rtol,
+                                          scales, floors)
+                fstats[4], fstats[3] = low, high
+                if not seen:
+                    run.failure = _jumped(system, low, high, method)
+            if run.failure is None:
+                run.failure = _failure(system, int(istats[3]), fstats, yfail, max_steps, method)
             break
         run.t_reached = t1
     run.steps, run.nfev, run.rejected = (int(v) for v in istats[:3])
@@ -87,38 +99,62 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, rtol: float, floors: np
 
 
 def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales: np.ndarray,
-            floors: np.ndarray) -> tuple[float, float]:
+            floors: np.ndarray) -> tuple[float, float, bool]:
     """Where in [low, high] (s) a step crossed a singular pose: that stretch is run again from
     ``y`` (the state at ``low``) at NARROW_RTOL, whose small steps reach the pose itself
     (`tolerances.NEAR_SINGULAR_MARGIN`): (t, t); or cross it again in a shorter step, which is
-    run again in turn (NARROW_RUNS at most). Where a run sees nothing the interval stays."""
+    run again in turn (NARROW_RUNS at most). Where a run sees nothing the interval stays; the
+    flag says whether the first run saw the pose at all (a coarse step can jump the loop to a
+    state beyond one that the motion itself never reaches: the four-bar at RK4 steps of 0.5 s)."""
     y_low, n = np.array(y, dtype=float), y.size
-    for _ in range(NARROW_RUNS):
+    for k in range(NARROW_RUNS):
         trial = y_low.copy()
         istats = np.array([0, 0, 0, codes.OK, 0, -1, system.rank], dtype=np.int64)
         fstats = np.array([0.0, 0.0, system.margin, 0.0, 0.0, 0.0, 1.0])
-        run_segment(system.program, trial, low, high, min(float(rtol), NARROW_RTOL),
+        run_segment(system.program, trial, low, high, min(float(rtol), NARROW_RTOL), DOP853,
                     np.maximum(np.maximum(np.abs(trial), floors), scales), np.empty(0),
                     np.empty((0, n)), istats, fstats, np.zeros((system.m, system.nv)),
                     np.zeros((system.m, max(system.m, system.nv))), NARROW_STEPS, np.zeros(n))
         if istats[3] != codes.CROSSED:
+            if k == 0:
+                return low, high, False
             break
         low, high, y_low = float(fstats[4]), float(fstats[3]), trial
         if low == high:
             break
-    return low, high
+    return low, high, True
 
 
-def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray,
-             max_steps: int) -> BaseException:
+def _jumped(system, low: float, high: float, method: str) -> BaseException:
+    """The run's step from ``low`` to ``high`` crossed a singular pose that a fine run of that
+    stretch does not reach: the step, not the mechanism, is at fault."""
+    fix = (f"tighten {setting_ref('rtol')}" if method == "dop853"
+           else f"shorten {setting_ref('step')}")
+    return ArithmeticError(f"the {method} step from t = {low:.6g} to {high:.6g} s jumped the "
+                           "loop across a singular pose that the motion does not reach (a run "
+                           f"at rtol {NARROW_RTOL:g} passes there); {fix}")
+
+
+def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: int,
+             method: str) -> BaseException:
     """The exception of a kernel's failure ``status`` at fstats[3] (see systems_dop853)."""
     t = float(fstats[3])
+    fewer = (f"loosen {setting_ref('rtol')}" if method == "dop853"
+             else f"lengthen {setting_ref('step')}")
     if status == codes.UNDERFLOW:
+        if method != "dop853":  # the fixed-step kernels' Newton failed in MAX_PIECES pieces
+            return ArithmeticError(f"{method}'s Newton iterations failed at t = {t:.6g} s even "
+                                   f"in {MAX_PIECES} pieces of the step; shorten "
+                                   f"{setting_ref('step')}")
         return ArithmeticError(f"step size underflow at t = {t:.6g} s")
+    if status == DIVERGED:
+        return ArithmeticError(f"the {method} run diverged at t = {t:.6g} s: its step is beyond "
+                               f"the method's stability there; shorten {setting_ref('step')} or "
+                               f"run the implicit method ({setting_ref('integrator')})")
     if status == codes.STEP_LIMIT:
         return RunBudgetError(f"{system.scene.source}: the run took {max_steps} steps by "
                               f"t = {t:.6g} s, the run bound ({setting_ref('max_steps')}); "
-                              f"raise it or loosen {setting_ref('rtol')}")
+                              f"raise it or {fewer}")
     if status == codes.LINALG:
         return np.linalg.LinAlgError("Matrix is not positive definite")
     if status == codes.CROSSED:

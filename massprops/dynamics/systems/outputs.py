@@ -18,7 +18,7 @@ import numpy as np
 from massprops.dynamics.systems import cutjoint
 from massprops.dynamics.systems import tree as tr
 from massprops.dynamics.systems.model import WORLD
-from massprops.rotation import canonical, matrix_to_quat
+from massprops.rotation import canonical, matrix_to_quat, rotation_angle_between
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,7 +53,7 @@ def body_states(system, y: np.ndarray):
         pos[s], vel[s] = kin.com, kin.V[:, 3:] + np.cross(kin.V[:, :3], kin.com)
         omega[s] = kin.V[:, :3]
         quat[s] = canonical(matrix_to_quat(kin.rotation))
-    return pos, quat, vel, omega
+    return pos + system.origin, quat, vel, omega
 
 
 def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples:
@@ -83,6 +83,8 @@ def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples
             for col in turns:
                 coords[k][:, col] = np.unwrap(coords[k][:, col])
     energy = np.array([system.energy(row) for row in y]) if with_energy else None
+    pos += system.origin  # back from the assembly's middle (assemble.localized)
+    points += system.origin
     return Samples(t, pos, quat, vel, omega, coords, rates, force, torque, energy, points)
 
 
@@ -173,3 +175,27 @@ def _joint_state(system, k: int, y: np.ndarray, kin):
             return -qj[::-1], -uj[::-1]
         return -qj, -uj
     return cutjoint.from_poses(tree, kin, sj)
+
+
+def evaluate_states(system, t: np.ndarray, y: np.ndarray) -> Samples:
+    """Body states only (no joints, reactions or energy) of ``system`` (a `System`) at (t, y):
+    for comparing runs."""
+    pos, quat, vel, omega = body_states(system, y)
+    none = np.zeros((len(t), 0, 3))
+    return Samples(t, pos, quat, vel, omega, [], [], none, none, None)
+
+
+def distance(a: Samples, b: Samples, size: float, scales: Samples | None = None) -> float:
+    """The contract's error between two system runs: the largest over the bodies of position
+    error / system size, orientation angle, velocity errors relative to the largest speeds (of
+    ``scales``, default ``a``: a run over a part of the time compares in its whole run's)."""
+    like = a if scales is None else scales
+    duration = float(like.t[-1]) or 1.0
+    v_scale = max(float(np.abs(like.velocity).max()), size / duration)
+    w_scale = max(float(np.abs(like.angular_velocity).max()), 1.0 / duration)
+    parts = [np.linalg.norm(a.position - b.position, axis=-1).max() / size,
+             rotation_angle_between(a.orientation.reshape(-1, 4),
+                                    b.orientation.reshape(-1, 4)).max(),
+             np.linalg.norm(a.velocity - b.velocity, axis=-1).max() / v_scale,
+             np.linalg.norm(a.angular_velocity - b.angular_velocity, axis=-1).max() / w_scale]
+    return float(max(parts))

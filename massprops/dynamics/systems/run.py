@@ -1,9 +1,5 @@
-"""Simulate a system scene: the start on the joints, the run, its error estimate, diagnostics.
-
-The error estimate is global, as for one body (dynamics.accuracy): a companion run at
-rtol / ADAPTIVE_TIGHTENING, compared in the contract's metric over all bodies (position error /
-system size, orientation angle, velocity errors relative to the run's largest speeds).
-"""
+"""Simulate a system scene: the start on the joints, the run (the method and its error
+estimate: `methods`), diagnostics, the trajectory file."""
 
 from __future__ import annotations
 
@@ -16,20 +12,21 @@ from pathlib import Path
 import numpy as np
 
 from massprops import tolerances
-from massprops.dynamics.accuracy import ADAPTIVE_TIGHTENING
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
-from massprops.dynamics.systems.assemble import build_tree, initial_coordinates
+from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
 from massprops.dynamics.systems.integrate import MAX_STEPS, integrate
+from massprops.dynamics.systems.methods import (
+    REASONS,
+    SYSTEM_INTEGRATORS,
+    choose,
+    error_estimate,
+)
 from massprops.dynamics.systems.model import SystemScene
-from massprops.dynamics.systems.outputs import Samples, body_states, evaluate
+from massprops.dynamics.systems.outputs import Samples, evaluate
 from massprops.dynamics.systems.system import System
 from massprops.errors import ComputationError, RunBudgetError, SceneError, UsageError
-from massprops.rotation import quat_to_matrix, rotation_angle_between
-
-SYSTEM_INTEGRATORS = ("auto", "dop853")
-"""What a system scene may name: the registry's kernels take one body's state only (DESIGN.md,
-"Systems of bodies"); its dop853 is here the systems package's own, over [q, u]."""
+from massprops.rotation import quat_to_matrix
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,6 +42,8 @@ class SystemResult:
     scene: SystemScene
     notes: tuple[str, ...] = field(default=())
     holding: list | None = None  # per scene joint: the static forces at the final pose
+    integrator: str = "dop853"
+    reason: str = REASONS["dop853"]
 
     def as_dict(self) -> dict:
         s, sc = self.samples, self.scene
@@ -62,7 +61,8 @@ class SystemResult:
                            **({} if self.holding is None else
                               {"holding": self.holding[k].tolist()})}
                   for k, j in enumerate(sc.joints)}
-        return {"integrator": "dop853", "reason": "systems: adaptive 8th order with projection",
+        return {"integrator": self.integrator,
+                "reason": f"system: {self.reason}; projected onto the joints",
                 "steps": self.steps, "evaluations": self.evaluations,
                 "rejected_steps": self.rejected, "wall_time_s": self.wall_time_s,
                 "final": {"t": float(s.t[-1]), "bodies": bodies, "joints": joints},
@@ -75,8 +75,9 @@ def _name(scene: SystemScene, i: int) -> str:
 
 def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
     """The System and its start y0 on the joints (refusals at the scene's lines), notes."""
+    scene, origin = localized(scene)  # about the assembly's middle, wherever it sits
     tree = build_tree(scene)
-    system = System(scene, tree)
+    system = System(scene, tree, origin)
     q, u, fixed_q, fixed_u = initial_coordinates(scene, tree)
     y0 = np.concatenate([q, u])
     notes: list[str] = []
@@ -132,10 +133,12 @@ def _windows(scene: SystemScene) -> np.ndarray:
 
 
 def simulate_system(scene: SystemScene, *, integrator: str | None = None,
-                    rtol: float | None = None, every: float | None = None,
-                    estimate: bool = True, notice=None,
+                    rtol: float | None = None, step: float | None = None,
+                    every: float | None = None, estimate: bool = True, notice=None,
                     max_steps: int | None = None) -> SystemResult:
-    """Run ``scene``; ComputationError (exit 3) at a singular pose or a failed step,
+    """Run ``scene`` with ``integrator`` (SYSTEM_INTEGRATORS; default the scene's) at ``rtol``
+    (dop853) or ``step`` (s, the fixed-step ones; default the scene's, else `default_step`);
+    ComputationError (exit 3) at a singular pose or a failed step,
     RunBudgetError once a run takes ``max_steps`` steps (default: integrate.MAX_STEPS).
     ``notice(text)``: told once if the step loop's kernel has to be compiled (see
     `compiled.compiling.prepare`)."""
@@ -146,19 +149,20 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     name = integrator or scene.time.integrator
     if name not in SYSTEM_INTEGRATORS:
         raise UsageError(f"{scene.source}: integrator {name} steps one body's state only; a "
-                         "system runs with auto or dop853 (its own DOP853 with projection)")
-    rtol = float(rtol if rtol is not None else scene.time.rtol)
+                         f"system runs with {', '.join(SYSTEM_INTEGRATORS)}")
     system, y0, notes = prepare(scene)
-    prepare_kernels([SYSTEMS], notice)  # compiled or loaded before the timed run
     duration = scene.time.duration
     if duration == 0:  # the start pose only (a description's static torques)
         return _static(system, y0, notes)
+    name, setting, reason = choose(system, y0, name, rtol, step)
+    # compiled or loaded before the timed run
+    prepare_kernels([SYSTEMS], notice)
     t_out = sample_times(duration, every if every is not None else scene.output.every,
                          scene.source)
     floors = _floors(system, duration)
     start = time.perf_counter()
     limit = max_steps or MAX_STEPS
-    run = integrate(system, y0, t_out, rtol, floors, _windows(scene), limit)
+    run = integrate(system, y0, t_out, setting, floors, _windows(scene), limit, name)
     wall = time.perf_counter() - start
     if isinstance(run.failure, RunBudgetError):
         raise run.failure
@@ -190,14 +194,11 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
         notes.append(f"{scene.source}: {system.m - system.rank} redundant constraint(s): the "
                      "reactions reported are the minimum-norm choice, not unique")
     if estimate:
-        other = integrate(system, y0, t_out, rtol / ADAPTIVE_TIGHTENING, floors,
-                          _windows(scene), 2 * limit)
-        if other.failure is None:
-            companion = evaluate_states(system, t_out, other.y_out)
-            diagnostics["error_estimate"] = distance(samples, companion, scene.size)
+        diagnostics["error_estimate"] = error_estimate(system, y0, t_out, name, setting, floors,
+                                                       _windows(scene), samples, 2 * limit)
     held = _holding(system, run.y_out[-1], notes)
     return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics, scene,
-                        tuple(notes), held)
+                        tuple(notes), held, name, reason)
 
 
 def _holding(system: System, y: np.ndarray, notes: list[str]) -> list | None:
@@ -234,27 +235,6 @@ def _energy_scale(system: System) -> float:
     weight = float(np.sum(np.linalg.norm(system.weights, axis=1))) * size
     springs = sum(s.stiffness for s in system.scene.springs) * size * size
     return weight + springs + sum(j.stiffness for j in system.scene.joints)
-
-
-def evaluate_states(system: System, t: np.ndarray, y: np.ndarray) -> Samples:
-    """Body states only (no joints, reactions or energy): for comparing runs."""
-    pos, quat, vel, omega = body_states(system, y)
-    none = np.zeros((len(t), 0, 3))
-    return Samples(t, pos, quat, vel, omega, [], [], none, none, None)
-
-
-def distance(a: Samples, b: Samples, size: float) -> float:
-    """The contract's error between two system runs: the largest over the bodies of position
-    error / system size, orientation angle, velocity errors relative to the largest speeds."""
-    duration = float(a.t[-1]) or 1.0
-    v_scale = max(float(np.abs(a.velocity).max()), size / duration)
-    w_scale = max(float(np.abs(a.angular_velocity).max()), 1.0 / duration)
-    parts = [np.linalg.norm(a.position - b.position, axis=-1).max() / size,
-             rotation_angle_between(a.orientation.reshape(-1, 4),
-                                    b.orientation.reshape(-1, 4)).max(),
-             np.linalg.norm(a.velocity - b.velocity, axis=-1).max() / v_scale,
-             np.linalg.norm(a.angular_velocity - b.angular_velocity, axis=-1).max() / w_scale]
-    return float(max(parts))
 
 
 # --- the trajectory file ------------------------------------------------------------------------

@@ -45,10 +45,13 @@ class Solution:
 
 
 class System:
-    """A scene's tree, loops and loads; ``rhs`` is the ODE ẏ = f(t, y), y = [q (nq), u (nv)]."""
+    """A scene's tree, loops and loads; ``rhs`` is the ODE ẏ = f(t, y), y = [q (nq), u (nv)].
+    ``scene`` and ``tree`` are about ``origin`` (3,) m world (`assemble.localized`): positions
+    and points the outputs give add it back."""
 
-    def __init__(self, scene: SystemScene, tree: Tree) -> None:
+    def __init__(self, scene: SystemScene, tree: Tree, origin: np.ndarray | None = None) -> None:
         self.scene, self.tree = scene, tree
+        self.origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=float)
         self.nq, self.nv, self.m = tree.nq, tree.nv, sum(p.rows for p in tree.prims)
         bodies = tree.bodies
         self.weights = np.array([b.mass * np.asarray(scene.gravity) for b in bodies])
@@ -59,6 +62,7 @@ class System:
                              for s in scene.springs]
         self.rank: int | None = None  # of G at the start; a drop later is a singular pose
         self.margin = 1.0  # smallest σ_min / σ_max of G M^(-1/2) kept over the run so far
+        self.fastest_rate: float | None = None  # ρ(∂ẏ/∂y) at the start (systems.stiffness)
         self.time = 0.0
         self.program = build_program(self)  # the arrays the compiled step loop runs on
 

@@ -1,0 +1,319 @@
+"""The registry's fixed-step methods over a system's y = [q, u], compiled: the step loop of one
+segment, called by the systems' one compiled entry (`systems_kernel.run_segment`).
+
+The same methods as the one-body kernels (`dynamics.integrators`: ``rk4``, order 4; ``midpoint``,
+the implicit midpoint rule, order 2, symplectic; ``implicit``, 3-stage Radau IIA, order 5,
+L-stable) over the right-hand side of a system program (`systems_step.rhs`), with what a system
+adds after every step, as `systems_dop853` does: the quaternion coordinates renormalised, (q, u)
+projected onto Φ = 0 and Φ̇ = 0 (`systems_step.project`), f evaluated at the projected end, the
+singular-pose test (`systems_step.accept`). Samples inside a step come from the cubic Hermite
+interpolant of its projected ends (values and derivatives), each projected in turn.
+
+Steps: n = ceil((t1 - t0) / h) equal steps that land on t1 (`integrators._shared.step_count`).
+The implicit methods solve their stage equations by simplified Newton iterations with the
+Jacobian ∂ẏ/∂y by forward differences at the step's start (n evaluations; Radau's 3n × 3n
+system I − h A ⊗ J is factorised whole: systems are small), corrections measured against the
+error scales (each component's floor and running max): they stop when the predicted remaining
+correction η‖Δ‖ is below NEWTON_TOL, or the correction is at round-off. Where Newton fails,
+the step is taken again in 2, 4, ... MAX_PIECES pieces, each a full step (projected, tested);
+beyond that the run stops with UNDERFLOW.
+
+istats and fstats as in `systems_dop853` (istats[2]: steps taken again in pieces).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from massprops.dynamics.compiled.jit import array_inner, inlined
+from massprops.dynamics.compiled.systems_dop853 import PROJECT_ITERATIONS, fail
+from massprops.dynamics.compiled.systems_loops import LINALG
+from massprops.dynamics.compiled.systems_step import (
+    CROSSED,
+    OK,
+    STEP_LIMIT,
+    UNDERFLOW,
+    accept,
+    normalize,
+    project,
+    rhs,
+)
+from massprops.dynamics.integrators._newton import NEWTON_TOL, ROUNDOFF, lu_factor, lu_solve
+from massprops.dynamics.integrators._shared import EPS, step_count
+from massprops.dynamics.integrators.radau import A as RADAU_A
+
+RK4, MIDPOINT, RADAU = 0, 1, 2
+"""Method codes of `segment` (and of `systems_kernel.run_segment`)."""
+
+METHODS = {"rk4": RK4, "midpoint": MIDPOINT, "implicit": RADAU}
+"""Registry names -> method codes."""
+
+ITERATIONS = 20
+"""Newton iterations allowed per step (they start from an explicit Euler guess, not from the
+last step's polynomial as the one-body kernels' do: a few more may be needed)."""
+
+MAX_PIECES = 64
+"""Pieces a step may be cut into where Newton fails before the run stops."""
+
+DIVERGED = 7
+"""Status: the step's end is not finite (a step beyond an explicit method's stability)."""
+
+NEWTON_FAILED = -1
+"""Internal status of a step whose Newton iterations failed (then cut into pieces)."""
+
+RADAU_C = np.array([RADAU_A[0].sum(), RADAU_A[1].sum(), 1.0])
+"""(3,) Radau IIA's nodes (the row sums of A)."""
+
+
+@inlined
+def scratch(n, method):
+    """The step loop's own arrays for a state of n entries (`segment`'s ``scratch``)."""
+    ns = 3 * n if method == RADAU else n
+    return (np.empty((4, n)), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+            np.empty((n, n)), np.empty((ns, ns)), np.zeros(ns, dtype=np.int64),
+            np.empty((3, n)), np.empty(ns), np.zeros(3), np.empty(n), np.empty(n))
+
+
+@array_inner
+def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners):
+    """Integrate arrays' y (in place) from t0 to t1 in equal steps of at most h_req with
+    ``method``, samples at t_out[istats[4]:] into y_out; arrays' ``scales`` (n,) are the Newton
+    norm's: each component's floor and running max |y_i| (updated here, as DOP853's). The
+    arguments come from `systems_kernel.run_segment` (views numba does not reference-count)."""
+    y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail = arrays
+    k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp = scratch
+    n = y.size
+    rank0 = istats[6]
+    # every load is on or off throughout a segment (segments end at the window edges), so the
+    # windows are judged at its middle: a stage on the end t1 must not see the next one's loads
+    # (Radau's last stage there made the slider-crank's drive end O(h) wrong: order 1)
+    tw = 0.5 * (t0 + t1)
+    status = rhs(prog, ws, tw, y, fa, rank0, fstats)
+    istats[1] += 1
+    if status != OK:
+        fail(istats, fstats, yfail, status, t0, y)
+        return
+    if accept(prog, ws, acc_b, acc_u, istats, fstats, t0) == CROSSED:  # starts at the pose
+        fstats[4] = t0
+        fail(istats, fstats, yfail, CROSSED, t0, y)
+        return
+    m = step_count(t0, t1, h_req)
+    h = (t1 - t0) / m
+    for i in range(m):
+        ta = t0 + i * h
+        tb = t1 if i == m - 1 else t0 + (i + 1) * h
+        if istats[0] >= max_steps:
+            fail(istats, fstats, yfail, STEP_LIMIT, ta, y)
+            return
+        for c in range(n):
+            ya[c], k[0, c] = y[c], fa[c]  # the step's start, kept for a retry in pieces
+        kout0 = istats[4]
+        pieces = 1
+        while True:
+            status = OK
+            for p in range(pieces):
+                tp = ta + (tb - ta) * p / pieces
+                tq = tb if p == pieces - 1 else ta + (tb - ta) * (p + 1) / pieces
+                status = _step(prog, ws, scratch, arrays, method, tp, tq, tw, rank0)
+                if status != OK:
+                    break
+            if status != NEWTON_FAILED:
+                break
+            istats[2] += 1
+            pieces *= 2
+            if pieces > MAX_PIECES:
+                fail(istats, fstats, yfail, UNDERFLOW, ta, ya)
+                return
+            for c in range(n):
+                y[c], fa[c] = ya[c], k[0, c]
+            istats[4] = kout0
+        if status != OK:
+            return  # _step recorded the failure
+        istats[0] += 1
+
+
+@array_inner
+def _step(prog, ws, scratch, arrays, method, ta, tb, tw, rank0):
+    """One step of ``method`` from (ta, y, fa) to tb: y, fa become the projected end and its
+    derivative, samples inside written; OK, NEWTON_FAILED (nothing changed), or a failure's
+    status (recorded). Every evaluation judges the load windows at ``tw``."""
+    y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail = arrays
+    k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp = scratch
+    n = y.size
+    h = tb - ta
+    if method == RK4:
+        status = _rk4(prog, ws, tw, h, y, fa, k, ytmp, ynew, rank0, fstats)
+        istats[1] += 3
+    else:
+        status = _jacobian(prog, ws, tw, y, fa, scales, jac, ytmp, ftmp, rank0, fstats)
+        istats[1] += n
+        if status == OK:
+            status, evals = _implicit(prog, ws, scratch, method, tw, h, y, scales, rank0, fstats)
+            istats[1] += evals
+    if status == NEWTON_FAILED:
+        return status
+    if (status == OK or status == LINALG) and not _finite(ynew):  # NaN reaches M first
+        status = DIVERGED
+    if status != OK:
+        fail(istats, fstats, yfail, status, tb, ynew)
+        return status
+    status = project(prog, ws, ynew, PROJECT_ITERATIONS, moved)
+    if status != OK:
+        fstats[5] = moved[2]
+        fail(istats, fstats, yfail, status, tb, ynew)
+        return status
+    normalize(prog, ynew[:prog[0][0]])
+    fstats[0] = max(fstats[0], moved[0])
+    fstats[1] = max(fstats[1], moved[1])
+    status = rhs(prog, ws, tw, ynew, fb, rank0, fstats)
+    istats[1] += 1
+    if status != OK:
+        fail(istats, fstats, yfail, status, tb, ynew)
+        return status
+    if accept(prog, ws, acc_b, acc_u, istats, fstats, tb) == CROSSED:
+        fstats[4] = ta if fstats[6] > prog[20][3] else tb  # at tb: reached it
+        fail(istats, fstats, yfail, CROSSED, tb, ynew)
+        return CROSSED
+    kout = istats[4]
+    while kout < t_out.size and t_out[kout] <= tb:
+        row = y_out[kout]
+        _hermite(y, fa, ynew, fb, h, (t_out[kout] - ta) / h, row)
+        status = project(prog, ws, row, PROJECT_ITERATIONS, moved)
+        if status != OK:
+            fstats[5] = moved[2]
+            fail(istats, fstats, yfail, status, t_out[kout], row)
+            return status
+        kout += 1
+    istats[4] = kout
+    for c in range(n):
+        y[c], fa[c] = ynew[c], fb[c]
+        scales[c] = max(scales[c], abs(y[c]))
+    return OK
+
+
+@array_inner
+def _rk4(prog, ws, tw, h, y, f0, k, ytmp, out, rank0, fstats):
+    """out = the classical RK4 step of length h from y, f0 = ẏ there; k[1:4] its other stages
+    (loads judged at ``tw``)."""
+    n = y.size
+    for s in range(1, 4):
+        c = 0.5 if s < 3 else 1.0
+        for i in range(n):
+            ytmp[i] = y[i] + c * h * (k[s - 1, i] if s > 1 else f0[i])
+        status = rhs(prog, ws, tw, ytmp, k[s], rank0, fstats)
+        if status != OK:
+            for i in range(n):
+                out[i] = ytmp[i]
+            return status
+    for i in range(n):
+        out[i] = y[i] + h / 6.0 * (f0[i] + 2.0 * k[1, i] + 2.0 * k[2, i] + k[3, i])
+    return OK
+
+
+@array_inner
+def _jacobian(prog, ws, tw, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
+    """jac (n, n) = ∂ẏ/∂y at y (loads at ``tw``) by forward differences (f0 = ẏ there). The
+    increment of component j is √EPS × its error scale (floor and running max, ≥ |y_j|),
+    rounded so that y_j + δ − y_j is exactly δ: Hairer's √(EPS max(1e-5, |y_j|)) is 5e-11 for
+    a rate at rest, where a stiff spring's ẏ ~ 1e7 has round-off 1e-9, and the column came out
+    as noise."""
+    n = y.size
+    for i in range(n):
+        ytmp[i] = y[i]
+    for j in range(n):
+        yj = y[j]
+        ytmp[j] = yj + math.sqrt(EPS) * max(scales[j], abs(yj))
+        d = ytmp[j] - yj
+        status = rhs(prog, ws, tw, ytmp, ftmp, rank0, fstats)
+        ytmp[j] = yj
+        if status != OK:
+            return status
+        for i in range(n):
+            jac[i, j] = (ftmp[i] - f0[i]) / d
+    return OK
+
+
+@array_inner
+def _implicit(prog, ws, scratch, method, tw, h, y, scales, rank0, fstats):
+    """ynew by simplified Newton on the stage equations: Radau IIA, Z (3, n) with
+    Z − h (A ⊗ I) F(y + Z) = 0, ynew = y + Z_3; the midpoint rule, w = y1 − y with
+    w − h f(t + h/2, y + w/2) = 0 (in z[0]). (status, evaluations)."""
+    k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp = scratch
+    n = y.size
+    st = 3 if method == RADAU else 1
+    for r in range(st):  # the Newton matrix I − h A ⊗ J (the midpoint rule: I − h/2 J)
+        for s in range(st):
+            a = RADAU_A[r, s] if method == RADAU else 0.5
+            for i in range(n):
+                for j in range(n):
+                    big[r * n + i, s * n + j] = -h * a * jac[i, j]
+                big[r * n + i, s * n + i] += 1.0 if r == s else 0.0
+        c = RADAU_C[r] if method == RADAU else 1.0
+        for i in range(n):
+            z[r, i] = h * c * fa[i]  # the explicit Euler guess: a first correction of O(h²)
+    if not lu_factor(big, piv):
+        return NEWTON_FAILED, 0
+    # η = 1 at the first iteration: nothing predicts the rate yet, so a step converges after
+    # one iteration only on a correction at round-off
+    evals, eta, norm_old = 0, 1.0, math.inf
+    for it in range(ITERATIONS):
+        for s in range(st):  # the stage derivatives F(y + Z_s), in k[1:]
+            for i in range(n):
+                ytmp[i] = y[i] + (z[s, i] if method == RADAU else 0.5 * z[0, i])
+            status = rhs(prog, ws, tw, ytmp, k[1 + s], rank0, fstats)
+            evals += 1
+            if status == LINALG:  # an iterate gone wild: not the system's fault
+                return NEWTON_FAILED, evals
+            if status != OK:
+                for i in range(n):
+                    ynew[i] = ytmp[i]  # where it failed, for the message
+                return status, evals
+        for r in range(st):  # the residual −(Z − h A F), solved for the correction
+            for i in range(n):
+                x = z[r, i]
+                for s in range(st):
+                    x -= h * (RADAU_A[r, s] if method == RADAU else 1.0) * k[1 + s, i]
+                dz[r * n + i] = -x
+        lu_solve(big, piv, dz)
+        dnorm = 0.0
+        for r in range(st):
+            for i in range(n):
+                z[r, i] += dz[r * n + i]
+        for i in range(n):  # each component against the largest it has been, or is at the end
+            sc = max(scales[i], abs(y[i] + z[st - 1, i]))
+            for r in range(st):
+                dnorm = max(dnorm, abs(dz[r * n + i]) / sc)
+        if not math.isfinite(dnorm):
+            return NEWTON_FAILED, evals
+        if it > 0:
+            theta = dnorm / norm_old
+            if theta >= 0.99:
+                return NEWTON_FAILED, evals
+            eta = theta / (1.0 - theta)
+        norm_old = dnorm
+        if dnorm <= ROUNDOFF or eta * dnorm <= NEWTON_TOL:
+            for i in range(n):
+                ynew[i] = y[i] + z[st - 1, i]
+            return OK, evals
+    return NEWTON_FAILED, evals
+
+
+@array_inner
+def _finite(v):
+    for x in v:
+        if not math.isfinite(x):
+            return False
+    return True
+
+
+@array_inner
+def _hermite(y0, f0, y1, f1, h, s, out):
+    """out = the cubic Hermite interpolant of (y0, f0) at s = 0 and (y1, f1) at s = 1."""
+    h00 = (1.0 + 2.0 * s) * (1.0 - s) ** 2
+    h10 = s * (1.0 - s) ** 2
+    h01 = s * s * (3.0 - 2.0 * s)
+    h11 = s * s * (s - 1.0)
+    for i in range(out.size):
+        out[i] = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i]

@@ -1,0 +1,113 @@
+"""Which method a system runs with, its setting, and the run's error estimate.
+
+The methods are the registry's names with a systems kernel (`integrate`): dop853 (adaptive,
+rtol), rk4, midpoint and implicit (fixed step h). The error estimate is global, as for one body
+(`dynamics.accuracy`): companion runs at `accuracy.companion_settings` (rtol / 20; or 2h and
+4h with Richardson's rule, `accuracy.global_estimate`), compared in the contract's metric over
+all bodies (`outputs.distance`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from massprops.dynamics.accuracy import companion_settings, global_estimate
+from massprops.dynamics.systems.integrate import integrate
+from massprops.dynamics.systems.outputs import Samples, distance, evaluate_states
+from massprops.dynamics.systems.stiffness import fastest_rate, unresolved_mode_error
+from massprops.dynamics.systems.system import System
+
+SYSTEM_INTEGRATORS = ("auto", "dop853", "rk4", "midpoint", "implicit")
+"""What a system scene may name: the registry's methods with a systems kernel over [q, u]
+(`integrate`); auto picks one (`choose`). The splitting methods compose one free body's exact
+rotation and have no system form; the closed form is one body's."""
+
+REASONS = {"dop853": "adaptive 8th order", "rk4": "fixed step, 4th order",
+           "midpoint": "fixed step, implicit midpoint (symplectic)",
+           "implicit": "fixed step, Radau IIA (L-stable, for stiff systems)"}
+"""The JSON's ``reason`` of each method on a system (every one projects after each step)."""
+
+def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
+           step: float | None) -> tuple[str, float, str]:
+    """(method, setting, reason) of a run asked for ``name`` (SYSTEM_INTEGRATORS) with the
+    caller's ``rtol`` / ``step`` (None: the scene's). ``auto`` is the one-body rule
+    (`dynamics.simulate.choose_integrator`): implicit where an explicit method would need more
+    than STEP_BUDGET steps to resolve the fastest rate over the run, else dop853. A system
+    without springs or dampers has no such rate and pays nothing to find that out."""
+    # deferred: dynamics.simulate brings the one-body run's modules (only its budget is shared)
+    from massprops.dynamics.simulate import STEP_BUDGET
+
+    scene, reason = system.scene, None
+    if name == "auto":
+        name, reason = "dop853", REASONS["dop853"]
+        if _sprung(scene):
+            rate = fastest_rate(system, y0)
+            explicit = scene.time.duration * rate / 2.8
+            if explicit > STEP_BUDGET:
+                name, reason = "implicit", (f"stiff: fastest rate {rate:.3g}/s would need "
+                                            f"~{explicit:.2g} explicit steps "
+                                            f"(> {STEP_BUDGET:.0e})")
+    if name == "dop853":
+        return name, float(rtol if rtol is not None else scene.time.rtol), \
+            reason or REASONS[name]
+    h = step if step is not None else scene.time.step
+    if h is None:
+        h = default_step(system, y0, scene.time.duration, stiff=name == "implicit")
+    return name, float(h), reason or REASONS[name]
+
+
+def _sprung(scene) -> bool:
+    """A spring or damper anywhere (between bodies or on a joint): the only stiff terms."""
+    return bool(scene.springs) or any(j.stiffness or j.damping for j in scene.joints)
+
+
+STEPS_PER_RUN = 1000
+"""A fixed step the scene does not give: the duration / this, shortened for an explicit method
+to 0.1 / the fastest rate of the start's linearised motion (default_step says why)."""
+
+
+def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
+                   setting: float, floors: np.ndarray, windows: np.ndarray, samples: Samples,
+                   limit: int) -> float | None:
+    """The run's global error estimate from its companion runs (`accuracy.companion_settings`
+    and `global_estimate`, in the systems' metric `outputs.distance`), and for a stiff method
+    at a step that does not resolve the fastest rate at least
+    `stiffness.unresolved_mode_error`; None where the first companion failed. A method whose
+    order can fall on stiff modes (``estimate_order``: Radau IIA to its stage order 3) is
+    credited its full order where the step resolves the start's fastest rate (h ρ < 1): there
+    is no stiff mode to reduce it, and the reduced credit overstated the four-bar's error
+    18-fold at h = 20 ms."""
+    # deferred: the registry imports the one-body kernels' modules (their orders only here)
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    spec, size = INTEGRATORS[name], system.scene.size
+    found = []
+    for other in companion_settings(spec.kind, setting):
+        run = integrate(system, y0, t_out, other, floors, windows, limit, name)
+        if run.failure is not None:
+            break
+        found.append(evaluate_states(system, t_out, run.y_out))
+    if not found:
+        return None
+    d_run = distance(samples, found[0], size)
+    d_companions = distance(found[0], found[1], size) if len(found) > 1 else None
+    credit = spec.estimate_order
+    if credit is not None and setting * fastest_rate(system, y0) < 1.0:
+        credit = spec.order
+    estimate = global_estimate(spec.kind, spec.order, d_run, d_companions, credit)
+    if spec.stiff:  # a fast mode all three runs damp or alias alike: measured apart
+        estimate = max(estimate, unresolved_mode_error(system, y0, name, setting, floors,
+                                                       windows, t_out, samples, limit))
+    return estimate
+
+
+def default_step(system: System, y0: np.ndarray, duration: float, *, stiff: bool) -> float:
+    """A fixed step the scene does not give (s): duration / STEPS_PER_RUN, and for an explicit
+    method at most 0.1 / ρ, ρ the spectral radius of ∂ẏ/∂y at the start (forward differences of
+    the numpy right-hand side): RK4 is stable to h ρ ≈ 2.8, and 0.1 keeps it accurate. A stiff
+    method steps over the fast rates: that is its point."""
+    h = duration / STEPS_PER_RUN
+    if stiff:
+        return h
+    rate = fastest_rate(system, y0)
+    return min(h, 0.1 / rate) if rate > 0 else h

@@ -1,0 +1,67 @@
+"""A system's fastest rate, and the one error a stiff method's companion runs cannot see on it:
+a fast mode the step does not resolve (`dynamics.stiffness` says why and how, for one body).
+
+Radau IIA and the midpoint rule at h ρ > 1 (ρ the fastest rate) damp or alias a fast mode, and
+their 2h and 4h companions do it alike, so Richardson sees nothing while the truth keeps
+oscillating: a double pendulum with an undamped k = 1e8 N·m/rad elbow spring at h = 1 ms was
+wrong by 1.9e-4 (its elbow's small fast swing) where the companions said 1e-11. The probe runs
+the method and dop853 at PROBE_RTOL over a short window from the start and compares them, at
+the one-body probe's times, in the whole run's scales.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from massprops import tolerances
+from massprops.dynamics.stiffness import PROBE_PERIODS, PROBE_RTOL, PROBE_SAMPLES, PROBE_STEPS
+from massprops.dynamics.systems.integrate import integrate
+from massprops.dynamics.systems.outputs import Samples, distance, evaluate_states
+
+
+def fastest_rate(system, y0: np.ndarray) -> float:
+    """ρ(∂ẏ/∂y) at (0, y0), 1/s: the spectral radius of the right-hand side's Jacobian by
+    forward differences of the numpy model (n evaluations), kept on ``system`` (a `System`)."""
+    if getattr(system, "fastest_rate", None) is not None:
+        return system.fastest_rate
+    # deferred: the numpy tree's q̇, only for this estimate
+    from massprops.dynamics.systems.tree import qdot
+
+    def f(y: np.ndarray) -> np.ndarray:
+        udot = system.solve(0.0, y, check=False, full=False).udot
+        return np.concatenate([qdot(system.tree, y[:system.nq], y[system.nq:]), udot])
+
+    f0, n = f(y0), y0.size
+    jac = np.empty((n, n))
+    for j in range(n):
+        y = y0.copy()
+        y[j] += math.sqrt(tolerances.EPS) * max(1.0, abs(y0[j]))
+        jac[:, j] = (f(y) - f0) / (y[j] - y0[j])
+    system.fastest_rate = float(np.abs(np.linalg.eigvals(jac)).max(initial=0.0))
+    return system.fastest_rate
+
+
+def unresolved_mode_error(system, y0: np.ndarray, name: str, h: float, floors: np.ndarray,
+                          windows: np.ndarray, t_out: np.ndarray, samples: Samples,
+                          limit: int) -> float:
+    """The error (`outputs.distance` in the scales of ``samples``, the whole run) of method
+    ``name`` at step ``h`` against dop853 at PROBE_RTOL over [0, W], W = PROBE_STEPS steps or
+    PROBE_PERIODS periods 2π/ρ, whichever is longer (on the run's own step grid, within the
+    duration); 0 where h ρ ≤ 1, inf where either run fails (no estimate then)."""
+    rate = fastest_rate(system, y0)
+    if h * rate <= 1.0:
+        return 0.0
+    duration = float(t_out[-1])
+    window = max(PROBE_STEPS * h, PROBE_PERIODS * 2.0 * math.pi / rate)
+    window = min(duration, h * math.ceil(window / h * (1.0 - 1e-12)))
+    t_probe = np.union1d(np.linspace(0.5 * window, window, PROBE_SAMPLES),
+                         t_out[t_out <= window])
+    inside = windows[windows < window]
+    runs = [integrate(system, y0, t_probe, setting, floors, inside, limit, method)
+            for method, setting in ((name, h), ("dop853", PROBE_RTOL))]
+    if any(run.failure is not None for run in runs):
+        return math.inf
+    ours, resolved = (evaluate_states(system, t_probe, run.y_out) for run in runs)
+    return distance(ours, resolved, system.scene.size, scales=samples)
