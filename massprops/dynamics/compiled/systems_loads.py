@@ -1,5 +1,6 @@
 """A system program's applied loads, compiled: gravity, body forces and torques (with their time
-windows), springs between bodies, and the tree joints' springs, dampers and drives, as in
+windows), springs between bodies, the tree joints' springs, dampers and drives, and the cut
+joints' as wrench pairs on their two bodies (`systems.cutjoint`), as in
 `dynamics.systems.system.System.applied` (spatial forces about O on each body, world, and
 generalised loads on the joints)."""
 
@@ -82,6 +83,71 @@ def applied(prog, t, q, u, ws):
         if lf[n, 4] <= t < lf[n, 5]:
             load += lf[n, 3]
         tau[ji[k, 4]] += sign * load
+    _cut_loads(prog, t, rot, com, vel, fext, v3)
+
+
+@array_inner
+def _cut_loads(prog, t, rot, com, vel, fext, v3):
+    """The loaded cut joints' wrench pairs into fext (`systems.cutjoint`, program 21-22)."""
+    ci, cf = prog[21], prog[22]
+    e, sa, sb, xa, xb, va, vb, x = v3[8], v3[9], v3[10], v3[11], v3[12], v3[13], v3[14], v3[15]
+    for n in range(ci.shape[0]):
+        a, b = ci[n, 1], ci[n, 2]
+        _turned(rot, a, cf[n, 0:3], e)
+        _point_state(rot, com, vel, a, cf[n, 9:12], xa, va)
+        _point_state(rot, com, vel, b, cf[n, 12:15], xb, vb)
+        rate = 0.0
+        for i in range(3):
+            rate += ((vel[b, i] if b >= 0 else 0.0) - (vel[a, i] if a >= 0 else 0.0)) * e[i]
+        if ci[n, 0] == 0:  # revolute: the turn from a's normal to b's about e
+            _turned(rot, a, cf[n, 3:6], sa)
+            _turned(rot, b, cf[n, 6:9], sb)
+            da = sa[0] * e[0] + sa[1] * e[1] + sa[2] * e[2]
+            db = sb[0] * e[0] + sb[1] * e[1] + sb[2] * e[2]
+            for i in range(3):
+                sa[i] -= da * e[i]
+                sb[i] -= db * e[i]
+            cross_into(x, sa, sb)
+            turn = math.atan2(x[0] * e[0] + x[1] * e[1] + x[2] * e[2],
+                              sa[0] * sb[0] + sa[1] * sb[1] + sa[2] * sb[2])
+            d = turn - cf[n, 16]
+            d -= 2.0 * math.pi * math.floor(d / (2.0 * math.pi) + 0.5)
+        else:  # prismatic: the shift (x_b − x_a)·e and its rate
+            if a >= 0:
+                cross_into(sa, vel[a, 0:3], e)  # ω_a × e
+            else:
+                for i in range(3):
+                    sa[i] = 0.0
+            d, rate = -cf[n, 16], 0.0
+            for i in range(3):
+                d += (xb[i] - xa[i]) * e[i]
+                rate += (vb[i] - va[i]) * e[i] + (xb[i] - xa[i]) * sa[i]
+        load = -cf[n, 15] * d - cf[n, 17] * rate
+        if cf[n, 19] <= t < cf[n, 20]:
+            load += cf[n, 18]
+        if ci[n, 0] == 0:
+            for i in range(3):
+                x[i], sb[i] = load * e[i], 0.0
+        else:
+            cross_into(x, xb, e)
+            for i in range(3):
+                x[i] *= load
+                sb[i] = load * e[i]
+        for i in range(3):
+            if b >= 0:
+                fext[b, i] += x[i]
+                fext[b, 3 + i] += sb[i]
+            if a >= 0:
+                fext[a, i] -= x[i]
+                fext[a, 3 + i] -= sb[i]
+
+
+@array_inner
+def _turned(rot, body, local, out):
+    """out = R_body local (the world's vectors are world already)."""
+    for i in range(3):
+        out[i] = local[i] if body < 0 else (rot[body, i, 0] * local[0] + rot[body, i, 1]
+                                            * local[1] + rot[body, i, 2] * local[2])
 
 
 @array_inner

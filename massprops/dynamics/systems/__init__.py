@@ -14,7 +14,8 @@ g^(c) = M ḣ + b - g per body, summed over each subtree from the leaves in.
 
 Modules: ``model`` (value objects), ``scene`` (the YAML rules), ``assemble`` (the spanning tree,
 cut joints, initial coordinates), ``tree`` (kinematics, CRBA, RNEA), ``loops`` (cut-joint
-constraints), ``system`` (accelerations, reactions, projection at the start and the outputs),
+constraints), ``cutjoint`` (a cut joint measured from its bodies; its spring, damper, drive),
+``system`` (accelerations, reactions, projection at the start and the outputs),
 ``program`` (the system as arrays for the compiled step loop, dynamics/compiled/systems_*),
 ``integrate`` (that loop's calls: DOP853 with projection and dense output, singular poses),
 ``outputs`` and ``run`` (simulate a system scene: outputs, diagnostics, error estimate),

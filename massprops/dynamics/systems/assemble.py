@@ -1,10 +1,17 @@
 """From a SystemScene to a `Tree`: the spanning tree, cut joints, and the initial state.
 
-The tree is grown breadth-first from the world. Joints the scene names in ``initial`` or that
-carry loads (damping, a spring, a drive) are taken first, so they stay tree joints whose
-coordinates are integrated; a distance joint and a description's loop joint are always cut; in
-each part that nothing joins to the world the first body gets a free joint (a floating base)
-and the tree grows from it. Every refusal names the scene's file, line and key.
+The tree is grown breadth-first from the world, each body's joints in the order: named in
+``initial``, then loaded (damping, a spring, a drive), then the rest, each in scene order; a
+distance joint and a description's loop joint are always cut; in each part that nothing joins
+to the world the first body gets a free joint (a floating base) and the tree grows from it.
+Breadth-first growth alone may still cut a named or loaded joint (the joint where a loop's two
+branches meet), so each such cut joint, named ones first, then loaded ones, each in scene order,
+is exchanged with a tree joint of the loop it closes that ranks below it (unloaded and unnamed
+first, then for a named joint a loaded one; among equals the last in scene order), and the tree
+is grown again over the joints so chosen. A loop with no such joint keeps its cut: a named cut
+joint is refused (its coordinates follow from the others), a loaded one carries its load on the
+cut (`cutjoint`). A scene with no named or loaded joint on a cut keeps the breadth-first cut.
+Every refusal names the scene's file, line and key.
 """
 
 from __future__ import annotations
@@ -24,7 +31,8 @@ from massprops.errors import SceneError
 class Tree:
     """bodies (SystemBody); joints (TreeJoint, parents before children); parent_joint: body ->
     index of the tree joint that carries it; cut: indices of the scene's cut joints; prims: their
-    primitives; of_scene: scene joint index -> ("tree", k) or ("cut", k); nq, nv."""
+    primitives; of_scene: scene joint index -> ("tree", k) or ("cut", k); nq, nv; loaded: the
+    tree joints with a spring, damper or drive, cut_loaded: the cut joints with one."""
 
     bodies: tuple
     joints: list
@@ -36,6 +44,7 @@ class Tree:
     nv: int
     size: float
     loaded: list = field(default_factory=list)  # tree joint indices with springs/drives
+    cut_loaded: list = field(default_factory=list)  # indices into ``cut`` with springs/drives
 
 
 def localized(scene: SystemScene) -> tuple[SystemScene, np.ndarray]:
@@ -75,13 +84,17 @@ def _priority(scene: SystemScene, k: int) -> int:
     return 0 if named else (1 if loaded else 2)
 
 
-def build_tree(scene: SystemScene) -> Tree:
-    """The spanning tree of ``scene``'s joints (see the module doc)."""
+def _loaded(j) -> bool:
+    return j.kind in ONE_AXIS and bool(j.damping or j.stiffness or j.drive)
+
+
+def _grow(scene: SystemScene, order: list, allowed: set | None):
+    """Breadth-first spanning tree over the joints in ``allowed`` (None: every joint that may be
+    a tree joint): ([(scene joint, parent, child, reversed)], used joints, floating bases)."""
     bodies = scene.bodies
-    order = sorted(range(len(scene.joints)), key=lambda k: (_priority(scene, k), k))
     placed, frontier = {WORLD}, [WORLD]
-    in_tree: list[tuple[int, int, int, bool]] = []  # (scene joint, parent, child, reversed)
-    used = set()
+    in_tree: list[tuple[int, int, int, bool]] = []
+    used: set = set()
     free: list[int] = []
     while frontier or len(placed) <= len(bodies):
         if not frontier:  # the rest hangs on a floating base: the first unplaced body
@@ -92,7 +105,8 @@ def build_tree(scene: SystemScene) -> Tree:
         for node in frontier:
             for k in order:
                 j = scene.joints[k]
-                if k in used or j.kind == "distance" or j.loop or node not in (j.a, j.b):
+                if k in used or j.kind == "distance" or j.loop or node not in (j.a, j.b) \
+                        or (allowed is not None and k not in allowed):
                     continue
                 other = j.b if j.a == node else j.a
                 if other in placed:
@@ -102,6 +116,54 @@ def build_tree(scene: SystemScene) -> Tree:
                 in_tree.append((k, node, other, j.a != node))
                 nxt.append(other)
         frontier = nxt
+    return in_tree, used, free
+
+
+def _tree_path(scene: SystemScene, used: set, a: int, b: int) -> list[int]:
+    """The tree joints (scene indices) on the path from body ``a`` to body ``b``."""
+    links: dict = {}
+    for k in used:
+        j = scene.joints[k]
+        links.setdefault(j.a, []).append((k, j.b))
+        links.setdefault(j.b, []).append((k, j.a))
+    came = {a: None}
+    todo = [a]
+    while todo and b not in came:
+        node = todo.pop()
+        for k, other in links.get(node, ()):
+            if other not in came:
+                came[other] = (k, node)
+                todo.append(other)
+    path, node = [], b
+    while came.get(node) is not None:
+        k, node = came[node]
+        path.append(k)
+    return path
+
+
+def _exchanged(scene: SystemScene, used: set) -> set:
+    """``used`` with each named, then loaded, cut joint exchanged for a lower-ranked tree joint
+    of its loop where the loop has one (the module doc's rule)."""
+    used = set(used)
+    for level in (0, 1):
+        for k, j in enumerate(scene.joints):
+            if k in used or j.loop or j.kind == "distance" or _priority(scene, k) != level:
+                continue
+            lower = [m for m in _tree_path(scene, used, j.a, j.b) if _priority(scene, m) > level]
+            if lower:
+                used.remove(max(lower, key=lambda m: (_priority(scene, m), m)))
+                used.add(k)
+    return used
+
+
+def build_tree(scene: SystemScene) -> Tree:
+    """The spanning tree of ``scene``'s joints (see the module doc)."""
+    bodies = scene.bodies
+    order = sorted(range(len(scene.joints)), key=lambda k: (_priority(scene, k), k))
+    in_tree, used, free = _grow(scene, order, None)
+    chosen = _exchanged(scene, used)
+    if chosen != used:
+        in_tree, used, free = _grow(scene, order, chosen)
     joints, iq, iu = [], 0, 0
     for i in free:  # floating bases first: they are roots
         joints.append(TreeJoint("free", WORLD, i, np.zeros((0, 3)), np.zeros(3), np.zeros(3),
@@ -126,23 +188,20 @@ def build_tree(scene: SystemScene) -> Tree:
     prims: list[Primitive] = []
     for n, k in enumerate(cut):
         j = scene.joints[k]
-        if j.kind in ONE_AXIS and (j.damping or j.stiffness or j.drive):
-            raise SceneError(f"{scene.where('joints.' + j.name)}joint {j.name!r} closes a loop "
-                             "and carries a spring, damper or drive, which only a tree joint "
-                             "may do yet; put the load on another joint of the loop")
         for name, values in (("positions", scene.initial.positions),
                              ("rates", scene.initial.rates)):
             if j.name in values:
                 raise SceneError(f"{scene.where(f'initial.{name}.{j.name}')}joint {j.name!r} "
-                                 "closes a loop: its coordinates follow from the others; name "
-                                 "another joint of the loop")
+                                 "closes a loop whose other joints are named too (or is a "
+                                 "description's loop joint): its coordinates follow from the "
+                                 f"others; remove it from initial.{name}")
         of_scene[k] = ("cut", n)
         prims += primitives(j, n, bodies)
     loaded = [n for n, j in enumerate(joints) if j.source is not None
-              and j.kind in ONE_AXIS and (scene.joints[j.source].damping
-                                          or scene.joints[j.source].stiffness
-                                          or scene.joints[j.source].drive)]
-    return Tree(bodies, joints, parent_joint, cut, prims, of_scene, iq, iu, scene.size, loaded)
+              and _loaded(scene.joints[j.source])]
+    cut_loaded = [n for n, k in enumerate(cut) if _loaded(scene.joints[k])]
+    return Tree(bodies, joints, parent_joint, cut, prims, of_scene, iq, iu, scene.size, loaded,
+                cut_loaded)
 
 
 def _tree_order(j: TreeJoint, value: np.ndarray) -> np.ndarray:

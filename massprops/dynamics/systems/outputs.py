@@ -4,7 +4,9 @@ Reactions are the notes' g^(c) = M ḣ + b - g: each body's net spatial force wi
 acceleration minus the applied loads and the cut joints' forces on it (λ), summed over each
 subtree from the leaves in; a tree joint's reaction on its child is that sum less the joint's own
 applied load (spring, damper, drive along its axis). A cut joint's reaction on its second body is
-Σ λ ρ_b. All are reported on the scene joint's second body at the joint's point, world frame.
+Σ λ ρ_b: its constraint force only, as for a tree joint, since a loaded cut joint's spring,
+damper and drive are applied loads on its two bodies (`cutjoint`, in ``fext``). All are reported
+on the scene joint's second body at the joint's point, world frame.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from massprops.dynamics.systems import cutjoint
 from massprops.dynamics.systems import tree as tr
 from massprops.dynamics.systems.model import WORLD
 from massprops.rotation import canonical, matrix_to_quat, rotation_angle_between
@@ -149,21 +152,7 @@ def _reactions(system, t: float, y: np.ndarray, sol, force: np.ndarray, torque: 
 
 
 def _world_point(tree, kin, body: int, world0: np.ndarray) -> np.ndarray:
-    if body == WORLD:
-        return np.asarray(world0, float)
-    b = tree.bodies[body]
-    return kin.com[body] + kin.rotation[body] @ (b.rotation0.T @ (world0 - b.com0))
-
-
-def _carry(tree, kin, body: int) -> np.ndarray:
-    """E = R R0ᵀ: the world frame at t = 0 carried by ``body`` (identity for the world)."""
-    if body == WORLD:
-        return np.eye(3)
-    return kin.rotation[body] @ tree.bodies[body].rotation0.T
-
-
-def _omega(kin, body: int) -> np.ndarray:
-    return np.zeros(3) if body == WORLD else kin.V[body, :3]
+    return cutjoint.world_point(tree, kin, body, world0)
 
 
 def _joint_state(system, k: int, y: np.ndarray, kin):
@@ -185,52 +174,7 @@ def _joint_state(system, k: int, y: np.ndarray, kin):
         if j.kind == "universal":
             return -qj[::-1], -uj[::-1]
         return -qj, -uj
-    return _from_poses(tree, kin, sj)
-
-
-def _from_poses(tree, kin, sj):
-    """A cut joint's coordinates and rates measured from its two bodies' poses."""
-    ea, eb = _carry(tree, kin, sj.a), _carry(tree, kin, sj.b)
-    rel = ea.T @ eb
-    w_rel = ea.T @ (_omega(kin, sj.b) - _omega(kin, sj.a))
-    if sj.kind == "spherical":
-        return matrix_to_quat(rel), w_rel
-    if sj.kind == "universal":
-        a0, a1 = sj.axes
-        target = rel @ a1
-        q0 = _angle_about(a0, a1, target)
-        rest = tr.rot(a0, q0).T @ rel
-        q1 = _angle_about(a1, _perp(a1), rest @ _perp(a1))
-        basis = np.stack([a0, tr.rot(a0, q0) @ a1], axis=1)
-        return np.array([q0, q1]), np.linalg.lstsq(basis, w_rel, rcond=None)[0]
-    axis = sj.axes[0]
-    turn = _angle_about(axis, _perp(axis), rel @ _perp(axis))
-    xa = _world_point(tree, kin, sj.a, sj.point)
-    xb = _world_point(tree, kin, sj.b, sj.point)
-    e = ea @ axis
-    shift = (xb - xa) @ e
-    va = np.zeros(3) if sj.a == WORLD else kin.V[sj.a, 3:] + tr.cross(kin.V[sj.a, :3], xa)
-    vb = kin.V[sj.b, 3:] + tr.cross(kin.V[sj.b, :3], xb)
-    shift_rate = (vb - va) @ e + (xb - xa) @ tr.cross(_omega(kin, sj.a), e)
-    if sj.kind == "revolute":
-        return np.array([turn]), np.array([w_rel @ axis])
-    if sj.kind == "prismatic":
-        return np.array([shift]), np.array([shift_rate])
-    return np.array([turn, shift]), np.array([w_rel @ axis, shift_rate])
-
-
-def _perp(axis: np.ndarray) -> np.ndarray:
-    helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
-    v = tr.cross(axis, helper)
-    return v / np.linalg.norm(v)
-
-
-def _angle_about(axis: np.ndarray, start: np.ndarray, end: np.ndarray) -> float:
-    """Signed angle (right hand about ``axis``) from ``start`` to ``end`` projected on the plane
-    normal to the axis."""
-    s = start - (start @ axis) * axis
-    e = end - (end @ axis) * axis
-    return float(np.arctan2(axis @ tr.cross(s, e), s @ e))
+    return cutjoint.from_poses(tree, kin, sj)
 
 
 def evaluate_states(system, t: np.ndarray, y: np.ndarray) -> Samples:

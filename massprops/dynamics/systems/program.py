@@ -15,7 +15,11 @@ A tuple of C-contiguous arrays, int64 or float64, in this order (the kernels ind
  16 springs (ns, 2) int [a, b]; 17 (ns, 9) [point on a, point on b, stiffness, rest, damping];
  18 loaded tree joints (nl,) int; 19 (nl, 6) [stiffness, rest, damping, drive, start, end];
  20 (3,) [system size m, CONSTRAINT_RANK_RTOL, the projection's position tolerance m]: the
-   tolerances travel as data, so a compiled kernel never holds a stale copy of one.
+   tolerances travel as data, so a compiled kernel never holds a stale copy of one;
+ 21 loaded cut joints (nc, 3) int [0 revolute / 1 prismatic, a, b]; 22 (nc, 21) [axis in a's
+   frame, the normal the turn is measured from in a's frame and in b's, the joint point in a's
+   and in b's frame, stiffness, rest, damping, drive, start, end] (`cutjoint`; body frames,
+   world for the world).
 Frames and meanings as in `tree`, `loops` and `System` (the numpy objects these mirror).
 """
 
@@ -24,6 +28,8 @@ from __future__ import annotations
 import numpy as np
 
 from massprops import tolerances
+from massprops.dynamics.systems.cutjoint import perp
+from massprops.dynamics.systems.model import WORLD
 
 KIND = {"fixed": 0, "revolute": 1, "prismatic": 2, "cylindrical": 3, "universal": 4,
         "spherical": 5, "free": 6}
@@ -70,6 +76,7 @@ def build_program(system) -> tuple:
     for k, jk in enumerate(tree.loaded):
         sj = scene.joints[joints[jk].source]
         lf[k] = [sj.stiffness, sj.rest, sj.damping, sj.drive, sj.start, sj.end]
+    ci, cf = _cut_loads(scene, tree)
     dims = np.array([tree.nq, tree.nv, system.m, n, nj], np.int64)
     out = (dims, ji, axes, sp, sc, rp0, parent_joint,
            np.array([b.mass for b in bodies], float),
@@ -79,6 +86,28 @@ def build_program(system) -> tuple:
            np.asarray(system.weights, float).reshape(n, 3), pi, pf, fi, ff, si, sf, li, lf,
            np.array([tree.size, tolerances.CONSTRAINT_RANK_RTOL,
                      tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size,
-                     tolerances.NEAR_SINGULAR_MARGIN]))
+                     tolerances.NEAR_SINGULAR_MARGIN]), ci, cf)
     return tuple(np.ascontiguousarray(a) for a in out)
+
+
+def _cut_loads(scene, tree) -> tuple[np.ndarray, np.ndarray]:
+    """Program entries 21 and 22: the loaded cut joints (module doc)."""
+    bodies = tree.bodies
+    ci = np.zeros((len(tree.cut_loaded), 3), np.int64)
+    cf = np.zeros((len(tree.cut_loaded), 21))
+
+    def local(body, vector, point=False):  # world at t = 0 -> the body's frame
+        if body == WORLD:
+            return vector
+        b = bodies[body]
+        return b.rotation0.T @ (vector - b.com0 if point else vector)
+
+    for k, n in enumerate(tree.cut_loaded):
+        sj = scene.joints[tree.cut[n]]
+        axis, normal = sj.axes[0], perp(sj.axes[0])
+        ci[k] = [int(sj.kind == "prismatic"), sj.a, sj.b]
+        cf[k] = [*local(sj.a, axis), *local(sj.a, normal), *local(sj.b, normal),
+                 *local(sj.a, sj.point, True), *local(sj.b, sj.point, True), sj.stiffness,
+                 sj.rest, sj.damping, sj.drive, sj.start, sj.end]
+    return ci, cf
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops import tolerances
+from massprops.dynamics.systems import cutjoint
 from massprops.dynamics.systems import tree as tr
 from massprops.dynamics.systems.assemble import Tree
 from massprops.dynamics.systems.loops import terms
@@ -67,7 +68,8 @@ class System:
 
     # --- loads ----------------------------------------------------------------------------------
     def applied(self, t: float, kin: tr.Kinematics, q: np.ndarray, u: np.ndarray):
-        """(fext (n, 6) spatial forces about O on each body, τ (nv,) joint loads)."""
+        """(fext (n, 6) spatial forces about O on each body, τ (nv,) joint loads); a loaded cut
+        joint's load is a wrench pair in fext (`cutjoint`)."""
         n = len(self.tree.bodies)
         fext = np.zeros((n, 6))
         for i in range(n):
@@ -98,6 +100,7 @@ class System:
                 if body != WORLD:
                     fext[body, :3] += sign * cross(x, force)
                     fext[body, 3:] += sign * force
+        cutjoint.add_loads(self.tree, self.scene, t, kin, fext)
         tau = np.zeros(self.nv)
         for k in self.tree.loaded:
             j = self.tree.joints[k]
@@ -210,7 +213,7 @@ class System:
 
     # --- energy -----------------------------------------------------------------------------------
     def energy(self, y: np.ndarray) -> float:
-        """Kinetic + gravity + springs (bodies' and joints'), J."""
+        """Kinetic + gravity + springs (bodies' and joints', tree and cut), J."""
         q, u = y[:self.nq], y[self.nq:]
         kin = tr.kinematics(self.tree, q, u)
         e = sum(0.5 * kin.V[i] @ kin.inertia[i] @ kin.V[i] for i in range(len(kin.com)))
@@ -226,7 +229,7 @@ class System:
             sj = self.scene.joints[j.source]
             coord = (-1.0 if j.reversed else 1.0) * q[j.iq]
             e += 0.5 * sj.stiffness * (coord - sj.rest) ** 2
-        return float(e)
+        return float(e + cutjoint.energy(self.tree, self.scene, kin))
 
     def conservative(self) -> bool:
         """Energy is conserved: no body forces or torques, no dampers or drives."""
