@@ -11,7 +11,7 @@ arrays alive while the views are used (pass them along, as `systems_dop853.run_s
 
 from __future__ import annotations
 
-from numba.core import types
+from numba.core import cgutils, types
 from numba.extending import intrinsic
 
 
@@ -37,3 +37,33 @@ def unowned(typingctx, x):
         return _strip(context, builder, signature.args[0], args[0])
 
     return x(x), codegen
+
+
+
+@intrinsic
+def by_ref(typingctx, x):
+    """A pointer to `unowned` views of x, kept in the caller's frame: pass it down instead of a
+    large tuple, which numba passes as one argument per array field (~10 words an array; the
+    program and workspace tuples are ~600). `at` reads one item back. Valid only while the
+    calling function runs (the copy is on its stack) and its owners live."""
+    def codegen(context, builder, signature, args):
+        slot = cgutils.alloca_once(builder, context.get_value_type(signature.args[0]))
+        builder.store(_strip(context, builder, signature.args[0], args[0]), slot)
+        return slot
+
+    return types.CPointer(x)(x), codegen
+
+
+@intrinsic
+def at(typingctx, ptr, index):
+    """Item ``index`` (a literal int) of the tuple `by_ref` pointed to, loading that item only
+    (a view numba does not count: `by_ref` stored it unowned)."""
+    if not isinstance(index, types.IntegerLiteral):
+        return None
+    k = index.literal_value
+    item = ptr.dtype[k]
+
+    def codegen(context, builder, signature, args):
+        return builder.load(cgutils.gep_inbounds(builder, args[0], 0, k))
+
+    return item(ptr, index), codegen
