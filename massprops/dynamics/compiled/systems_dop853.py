@@ -29,10 +29,10 @@ from massprops.dynamics.compiled.systems_step import (
     accept,
     normalize,
     project,
-    rhs,
+    rhs_ref,
     workspace,
 )
-from massprops.dynamics.compiled.unowned import unowned
+from massprops.dynamics.compiled.unowned import by_ref, unowned
 from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, C, D
 
 E3 = B - BHH
@@ -78,7 +78,8 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
     k, ytmp, ynew, cont, moved = scratch
     n = y.size
     rank0 = istats[6]
-    status = rhs(prog, ws, t0, y, k[0], rank0, fstats)
+    pp, wp = by_ref(prog), by_ref(ws)  # the right-hand side's arguments (`systems_step.rhs_ref`)
+    status = rhs_ref(pp, wp, t0, y, k[0], rank0, fstats)
     istats[1] += 1
     if status != OK:
         _fail(istats, fstats, yfail, status, t0, y)
@@ -98,7 +99,7 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
     h = min(h, hmax)
     for i in range(n):
         ytmp[i] = y[i] + h * k[0, i]
-    status = rhs(prog, ws, t0 + h, ytmp, k[1], rank0, fstats)
+    status = rhs_ref(pp, wp, t0 + h, ytmp, k[1], rank0, fstats)
     istats[1] += 1
     if status != OK:
         _fail(istats, fstats, yfail, status, t0 + h, ytmp)
@@ -126,7 +127,7 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
         for s in range(1, 12):
             _stage(y, h, k, s, ytmp)
             t_last = t + h * C[s]
-            status = rhs(prog, ws, t_last, ytmp, k[s], rank0, fstats)
+            status = rhs_ref(pp, wp, t_last, ytmp, k[s], rank0, fstats)
             if status != OK:
                 istats[1] += s
                 _fail(istats, fstats, yfail, status, t_last, ytmp)
@@ -160,7 +161,7 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
             fstats[0] = max(fstats[0], moved[0])
             fstats[1] = max(fstats[1], moved[1])
             t_last = t_new
-            status = rhs(prog, ws, t_new, ynew, k[12], rank0, fstats)
+            status = rhs_ref(pp, wp, t_new, ynew, k[12], rank0, fstats)
             istats[1] += 1
             if status != OK:
                 _fail(istats, fstats, yfail, status, t_new, ynew)
@@ -174,7 +175,7 @@ def _segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
                 for s in range(13, 16):
                     _stage(y, h, k, s, ytmp)
                     t_last = t + h * C[s]
-                    status = rhs(prog, ws, t_last, ytmp, k[s], rank0, fstats)
+                    status = rhs_ref(pp, wp, t_last, ytmp, k[s], rank0, fstats)
                     if status != OK:
                         _fail(istats, fstats, yfail, status, t_last, ytmp)
                         return

@@ -221,34 +221,22 @@ def kinematics(pp, q, u, wp):
 
 @inlined
 def _spatial_inertia(mass, inertia, r, c, out, tmp):
-    """out (6, 6) about O: [[J_w - m c̃c̃, m c̃], [-m c̃, m E]], J_w = R J Rᵀ."""
+    """out (6, 6) about O: [[J_w - m c̃c̃, m c̃], [-m c̃, m E]], J_w = R J Rᵀ (as (R J) Rᵀ)."""
     for i in range(3):
-        for j in range(3):
-            s = 0.0
-            for k in range(3):
-                for n in range(3):
-                    s += r[i, k] * inertia[k, n] * r[j, n]
-            tmp[i, j] = s
+        for k in range(3):
+            tmp[i, k] = r[i, 0] * inertia[0, k] + r[i, 1] * inertia[1, k] \
+                + r[i, 2] * inertia[2, k]
     cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
     for i in range(3):
         for j in range(3):
             # c̃c̃ = c cᵀ - |c|² E
-            out[i, j] = tmp[i, j] - mass * (c[i] * c[j] - (cc if i == j else 0.0))
+            out[i, j] = tmp[i, 0] * r[j, 0] + tmp[i, 1] * r[j, 1] + tmp[i, 2] * r[j, 2] \
+                - mass * (c[i] * c[j] - (cc if i == j else 0.0))
             out[3 + i, 3 + j] = mass if i == j else 0.0
-    for i in range(3):
-        for j in range(3):
-            sk = 0.0  # c̃[i, j]
-            if i == 0 and j == 1:
-                sk = -c[2]
-            elif i == 0 and j == 2:
-                sk = c[1]
-            elif i == 1 and j == 0:
-                sk = c[2]
-            elif i == 1 and j == 2:
-                sk = -c[0]
-            elif i == 2 and j == 0:
-                sk = -c[1]
-            elif i == 2 and j == 1:
-                sk = c[0]
-            out[i, 3 + j] = mass * sk
-            out[3 + i, j] = -mass * sk
+    mx, my, mz = mass * c[0], mass * c[1], mass * c[2]
+    out[0, 3], out[0, 4], out[0, 5] = 0.0, -mz, my  # m c̃
+    out[1, 3], out[1, 4], out[1, 5] = mz, 0.0, -mx
+    out[2, 3], out[2, 4], out[2, 5] = -my, mx, 0.0
+    out[3, 0], out[3, 1], out[3, 2] = 0.0, mz, -my  # -m c̃
+    out[4, 0], out[4, 1], out[4, 2] = -mz, 0.0, mx
+    out[5, 0], out[5, 1], out[5, 2] = my, -mx, 0.0
