@@ -30,8 +30,9 @@ from massprops.dynamics.compiled.systems_step import (
     accept,
     normalize,
     project,
-    rhs,
+    rhs_ref,
 )
+from massprops.dynamics.compiled.unowned import by_ref
 from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, C, D
 
 E3 = B - BHH
@@ -76,7 +77,8 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
     # every load is on or off throughout a segment (segments end at the window edges), so the
     # windows are judged at its middle: a stage on the end t1 must not see the next one's loads
     tw = 0.5 * (t0 + t1)
-    status = rhs(prog, ws, tw, y, k[0], rank0, fstats)
+    pp, wp = by_ref(prog), by_ref(ws)  # the right-hand side's arguments (`systems_step.rhs_ref`)
+    status = rhs_ref(pp, wp, tw, y, k[0], rank0, fstats)
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, t0, y)
@@ -96,7 +98,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
     h = min(h, hmax)
     for i in range(n):
         ytmp[i] = y[i] + h * k[0, i]
-    status = rhs(prog, ws, tw, ytmp, k[1], rank0, fstats)
+    status = rhs_ref(pp, wp, tw, ytmp, k[1], rank0, fstats)
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, t0 + h, ytmp)
@@ -124,7 +126,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
         for s in range(1, 12):
             _stage(y, h, k, s, ytmp)
             t_last = t + h * C[s]
-            status = rhs(prog, ws, tw, ytmp, k[s], rank0, fstats)
+            status = rhs_ref(pp, wp, tw, ytmp, k[s], rank0, fstats)
             if status != OK:
                 istats[1] += s
                 fail(istats, fstats, yfail, status, t_last, ytmp)
@@ -158,7 +160,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
             fstats[0] = max(fstats[0], moved[0])
             fstats[1] = max(fstats[1], moved[1])
             t_last = t_new
-            status = rhs(prog, ws, tw, ynew, k[12], rank0, fstats)
+            status = rhs_ref(pp, wp, tw, ynew, k[12], rank0, fstats)
             istats[1] += 1
             if status != OK:
                 fail(istats, fstats, yfail, status, t_new, ynew)
@@ -172,7 +174,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
                 for s in range(13, 16):
                     _stage(y, h, k, s, ytmp)
                     t_last = t + h * C[s]
-                    status = rhs(prog, ws, tw, ytmp, k[s], rank0, fstats)
+                    status = rhs_ref(pp, wp, tw, ytmp, k[s], rank0, fstats)
                     if status != OK:
                         fail(istats, fstats, yfail, status, t_last, ytmp)
                         return

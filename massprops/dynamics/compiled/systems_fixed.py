@@ -38,8 +38,9 @@ from massprops.dynamics.compiled.systems_step import (
     accept,
     normalize,
     project,
-    rhs,
+    rhs_ref,
 )
+from massprops.dynamics.compiled.unowned import by_ref
 from massprops.dynamics.integrators._newton import NEWTON_TOL, ROUNDOFF, lu_factor, lu_solve
 from massprops.dynamics.integrators._shared import EPS, step_count
 from massprops.dynamics.integrators.radau import A as RADAU_A
@@ -90,7 +91,8 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
     # windows are judged at its middle: a stage on the end t1 must not see the next one's loads
     # (Radau's last stage there made the slider-crank's drive end O(h) wrong: order 1)
     tw = 0.5 * (t0 + t1)
-    status = rhs(prog, ws, tw, y, fa, rank0, fstats)
+    pp, wp = by_ref(prog), by_ref(ws)  # the right-hand side's arguments (`systems_step.rhs_ref`)
+    status = rhs_ref(pp, wp, tw, y, fa, rank0, fstats)
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, t0, y)
@@ -116,7 +118,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
             for p in range(pieces):
                 tp = ta + (tb - ta) * p / pieces
                 tq = tb if p == pieces - 1 else ta + (tb - ta) * (p + 1) / pieces
-                status = _step(prog, ws, scratch, arrays, method, tp, tq, tw, rank0)
+                status = _step(prog, ws, pp, wp, scratch, arrays, method, tp, tq, tw, rank0)
                 if status != OK:
                     break
             if status != NEWTON_FAILED:
@@ -135,22 +137,23 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
 
 
 @array_inner
-def _step(prog, ws, scratch, arrays, method, ta, tb, tw, rank0):
+def _step(prog, ws, pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
     """One step of ``method`` from (ta, y, fa) to tb: y, fa become the projected end and its
     derivative, samples inside written; OK, NEWTON_FAILED (nothing changed), or a failure's
-    status (recorded). Every evaluation judges the load windows at ``tw``."""
+    status (recorded). Every evaluation judges the load windows at ``tw``; pp, wp: the program
+    and workspace by reference (`unowned.by_ref`, made by `segment`)."""
     y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail = arrays
     k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp = scratch
     n = y.size
     h = tb - ta
     if method == RK4:
-        status = _rk4(prog, ws, tw, h, y, fa, k, ytmp, ynew, rank0, fstats)
+        status = _rk4(pp, wp, tw, h, y, fa, k, ytmp, ynew, rank0, fstats)
         istats[1] += 3
     else:
-        status = _jacobian(prog, ws, tw, y, fa, scales, jac, ytmp, ftmp, rank0, fstats)
+        status = _jacobian(pp, wp, tw, y, fa, scales, jac, ytmp, ftmp, rank0, fstats)
         istats[1] += n
         if status == OK:
-            status, evals = _implicit(prog, ws, scratch, method, tw, h, y, scales, rank0, fstats)
+            status, evals = _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0, fstats)
             istats[1] += evals
     if status == NEWTON_FAILED:
         return status
@@ -167,7 +170,7 @@ def _step(prog, ws, scratch, arrays, method, ta, tb, tw, rank0):
     normalize(prog, ynew[:prog[0][0]])
     fstats[0] = max(fstats[0], moved[0])
     fstats[1] = max(fstats[1], moved[1])
-    status = rhs(prog, ws, tw, ynew, fb, rank0, fstats)
+    status = rhs_ref(pp, wp, tw, ynew, fb, rank0, fstats)
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, tb, ynew)
@@ -194,7 +197,7 @@ def _step(prog, ws, scratch, arrays, method, ta, tb, tw, rank0):
 
 
 @array_inner
-def _rk4(prog, ws, tw, h, y, f0, k, ytmp, out, rank0, fstats):
+def _rk4(pp, wp, tw, h, y, f0, k, ytmp, out, rank0, fstats):
     """out = the classical RK4 step of length h from y, f0 = ẏ there; k[1:4] its other stages
     (loads judged at ``tw``)."""
     n = y.size
@@ -202,7 +205,7 @@ def _rk4(prog, ws, tw, h, y, f0, k, ytmp, out, rank0, fstats):
         c = 0.5 if s < 3 else 1.0
         for i in range(n):
             ytmp[i] = y[i] + c * h * (k[s - 1, i] if s > 1 else f0[i])
-        status = rhs(prog, ws, tw, ytmp, k[s], rank0, fstats)
+        status = rhs_ref(pp, wp, tw, ytmp, k[s], rank0, fstats)
         if status != OK:
             for i in range(n):
                 out[i] = ytmp[i]
@@ -213,7 +216,7 @@ def _rk4(prog, ws, tw, h, y, f0, k, ytmp, out, rank0, fstats):
 
 
 @array_inner
-def _jacobian(prog, ws, tw, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
+def _jacobian(pp, wp, tw, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
     """jac (n, n) = ∂ẏ/∂y at y (loads at ``tw``) by forward differences (f0 = ẏ there). The
     increment of component j is √EPS × its error scale (floor and running max, ≥ |y_j|),
     rounded so that y_j + δ − y_j is exactly δ: Hairer's √(EPS max(1e-5, |y_j|)) is 5e-11 for
@@ -226,7 +229,7 @@ def _jacobian(prog, ws, tw, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
         yj = y[j]
         ytmp[j] = yj + math.sqrt(EPS) * max(scales[j], abs(yj))
         d = ytmp[j] - yj
-        status = rhs(prog, ws, tw, ytmp, ftmp, rank0, fstats)
+        status = rhs_ref(pp, wp, tw, ytmp, ftmp, rank0, fstats)
         ytmp[j] = yj
         if status != OK:
             return status
@@ -236,7 +239,7 @@ def _jacobian(prog, ws, tw, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
 
 
 @array_inner
-def _implicit(prog, ws, scratch, method, tw, h, y, scales, rank0, fstats):
+def _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0, fstats):
     """ynew by simplified Newton on the stage equations: Radau IIA, Z (3, n) with
     Z − h (A ⊗ I) F(y + Z) = 0, ynew = y + Z_3; the midpoint rule, w = y1 − y with
     w − h f(t + h/2, y + w/2) = 0 (in z[0]). (status, evaluations)."""
@@ -262,7 +265,7 @@ def _implicit(prog, ws, scratch, method, tw, h, y, scales, rank0, fstats):
         for s in range(st):  # the stage derivatives F(y + Z_s), in k[1:]
             for i in range(n):
                 ytmp[i] = y[i] + (z[s, i] if method == RADAU else 0.5 * z[0, i])
-            status = rhs(prog, ws, tw, ytmp, k[1 + s], rank0, fstats)
+            status = rhs_ref(pp, wp, tw, ytmp, k[1 + s], rank0, fstats)
             evals += 1
             if status == LINALG:  # an iterate gone wild: not the system's fault
                 return NEWTON_FAILED, evals

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from massprops.dynamics.compiled.jit import array_inner
+from massprops.dynamics.compiled.jit import array_inner, inlined
 
 SWEEPS = 60
 """Most Jacobi sweeps; a few-by-few matrix converges in 5-10 (quadratically), this only bounds a
@@ -26,7 +26,7 @@ ORTHOGONAL = 2.220446049250313e-16
 criterion, as in LAPACK's dgesvj)."""
 
 
-@array_inner
+@inlined
 def cholesky(a, low, n):
     """low[:n, :n] (lower part) = the Cholesky factor of a[:n, :n]; False if not positive
     definite (a NaN pivot goes on, giving NaN, as numpy's factor of a NaN matrix does)."""
@@ -46,7 +46,7 @@ def cholesky(a, low, n):
     return True
 
 
-@array_inner
+@inlined
 def lower_solve(low, b, n):
     """b[:n] = L⁻¹ b[:n]."""
     for i in range(n):
@@ -56,7 +56,7 @@ def lower_solve(low, b, n):
         b[i] = s / low[i, i]
 
 
-@array_inner
+@inlined
 def upper_solve(low, b, n):
     """b[:n] = L⁻ᵀ b[:n]."""
     for i in range(n - 1, -1, -1):

@@ -8,17 +8,18 @@ from __future__ import annotations
 
 import math
 
-from massprops.dynamics.compiled.jit import array_inner
+from massprops.dynamics.compiled.jit import array_inner, inlined
 from massprops.dynamics.compiled.systems_tree import cross_into
+from massprops.dynamics.compiled.unowned import at
 
 
 @array_inner
-def applied(prog, t, q, u, ws):
+def applied(pp, t, q, u, wp):
     """fext (n, 6) spatial forces about O on each body and τ (nv,) joint loads (System.applied)."""
-    ji, bweight = prog[1], prog[11]
-    fi, ff, si, sf, li, lf = prog[14], prog[15], prog[16], prog[17], prog[18], prog[19]
-    rot, com, vel, fext, tau = ws[0], ws[1], ws[2], ws[11], ws[12]
-    v3 = ws[9]
+    ji, bweight = at(pp, 1), at(pp, 11)
+    fi, ff, si, sf, li, lf = at(pp, 14), at(pp, 15), at(pp, 16), at(pp, 17), at(pp, 18), at(pp, 19)
+    rot, com, vel, fext, tau = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 11), at(wp, 12)
+    v3 = at(wp, 9)
     vec, x, xa, xb = v3[0], v3[1], v3[2], v3[3]
     va, vb, dd, force = v3[4], v3[5], v3[6], v3[7]
     for i in range(com.shape[0]):
@@ -83,13 +84,13 @@ def applied(prog, t, q, u, ws):
         if lf[n, 4] <= t < lf[n, 5]:
             load += lf[n, 3]
         tau[ji[k, 4]] += sign * load
-    _cut_loads(prog, t, rot, com, vel, fext, v3)
+    _cut_loads(at(pp, 21), at(pp, 22), t, rot, com, vel, fext, v3)
 
 
 @array_inner
-def _cut_loads(prog, t, rot, com, vel, fext, v3):
-    """The loaded cut joints' wrench pairs into fext (`systems.cutjoint`, program 21-22)."""
-    ci, cf = prog[21], prog[22]
+def _cut_loads(ci, cf, t, rot, com, vel, fext, v3):
+    """The loaded cut joints' wrench pairs into fext (`systems.cutjoint`; ci, cf: program
+    entries 21 and 22)."""
     e, sa, sb, xa, xb, va, vb, x = v3[8], v3[9], v3[10], v3[11], v3[12], v3[13], v3[14], v3[15]
     for n in range(ci.shape[0]):
         a, b = ci[n, 1], ci[n, 2]
@@ -142,7 +143,7 @@ def _cut_loads(prog, t, rot, com, vel, fext, v3):
                 fext[a, 3 + i] -= sb[i]
 
 
-@array_inner
+@inlined
 def _turned(rot, body, local, out):
     """out = R_body local (the world's vectors are world already)."""
     for i in range(3):
@@ -150,7 +151,7 @@ def _turned(rot, body, local, out):
                                             * local[1] + rot[body, i, 2] * local[2])
 
 
-@array_inner
+@inlined
 def _point_state(rot, com, vel, body, local, x, v):
     """World position and velocity of a body point (the world's points are world already)."""
     if body < 0:

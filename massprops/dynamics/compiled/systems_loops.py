@@ -9,7 +9,7 @@ start's at an evaluated state).
 
 from __future__ import annotations
 
-from massprops.dynamics.compiled.jit import array_inner
+from massprops.dynamics.compiled.jit import array_inner, inlined
 from massprops.dynamics.compiled.systems_linalg import (
     cholesky,
     jacobi_svd,
@@ -19,11 +19,12 @@ from massprops.dynamics.compiled.systems_linalg import (
 from massprops.dynamics.compiled.systems_loads import applied
 from massprops.dynamics.compiled.systems_mass import aba, bias, crba
 from massprops.dynamics.compiled.systems_tree import cross_into, kinematics
+from massprops.dynamics.compiled.unowned import at
 
 OK, LINALG, SINGULAR = 0, 6, 3
 
 
-@array_inner
+@inlined
 def _point(rot, com, vel, acc, body, local, x, v, a, t):
     """World position, velocity and acceleration (kinematics' A) of a body point."""
     if body < 0:
@@ -44,7 +45,7 @@ def _point(rot, com, vel, acc, body, local, x, v, a, t):
         a[i] += t[i]
 
 
-@array_inner
+@inlined
 def _dir(rot, vel, acc, body, local, out, i):
     """out = R_body local (the world: local), or, with i >= 0, ω (i = 0) or ω̇ (i = 1)."""
     if i >= 0:
@@ -57,12 +58,12 @@ def _dir(rot, vel, acc, body, local, out, i):
 
 
 @array_inner
-def terms(prog, ws):
+def terms(pp, wp):
     """Φ (m,), Φ̈ at u̇ = 0 (m,), ρ_b and ρ_a (m, 6), G (m, nv) into the workspace."""
-    pi, pf, size, pjoint, ji = prog[12], prog[13], prog[20][0], prog[6], prog[1]
-    phi, gdot, rb, ra, g, s = ws[19], ws[20], ws[21], ws[22], ws[23], ws[5]
-    rot, com, vel, acc = ws[0], ws[1], ws[2], ws[3]
-    v = ws[9]
+    pi, pf, size, pjoint, ji = at(pp, 12), at(pp, 13), at(pp, 20)[0], at(pp, 6), at(pp, 1)
+    phi, gdot, rb, ra, g, s = at(wp, 19), at(wp, 20), at(wp, 21), at(wp, 22), at(wp, 23), at(wp, 5)
+    rot, com, vel, acc = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3)
+    v = at(wp, 9)
     xa, va, aa, xb, vb, ab, t, e = v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
     d, dd, ddd, w1, w2, w3, w4, w5 = v[8], v[9], v[10], v[11], v[12], v[13], v[14], v[15]
     for n in range(pi.shape[0]):
@@ -148,7 +149,7 @@ def terms(prog, ws):
                     j = pjoint[ji[j, 1]] if ji[j, 1] >= 0 else -1
 
 
-@array_inner
+@inlined
 def _rho(out, row, x, e, sign):
     """out[row] = sign (x × e, e)."""
     out[row, 0] = sign * (x[1] * e[2] - x[2] * e[1])
@@ -158,17 +159,17 @@ def _rho(out, row, x, e, sign):
 
 
 @array_inner
-def factor(prog, ws):
+def factor(pp, wp):
     """After `kinematics`: M, its Cholesky factor L, the constraint terms, B = G L⁻ᵀ and its
     SVD (ws: U (m, kk), σ (kk,), V (nv, kk), kk = min(m, nv)); False if M is not positive
     definite. The count of singular values kept is returned in ws[30][0]."""
-    mass, low, g, bm, x, vs, sv, uo, vo, row = (ws[24], ws[25], ws[23], ws[26], ws[27], ws[28],
-                                                ws[29], ws[31], ws[32], ws[33])
+    mass, low, g, bm, x = at(wp, 24), at(wp, 25), at(wp, 23), at(wp, 26), at(wp, 27)
+    vs, sv, uo, vo, row = at(wp, 28), at(wp, 29), at(wp, 31), at(wp, 32), at(wp, 33)
     nv, m = mass.shape[0], g.shape[0]
-    crba(prog, ws, mass)
+    crba(pp, wp, mass)
     if not cholesky(mass, low, nv):
         return False
-    terms(prog, ws)
+    terms(pp, wp)
     for i in range(m):
         for c in range(nv):
             row[c] = g[i, c]
@@ -199,9 +200,9 @@ def factor(prog, ws):
     top = 0.0
     for j in range(kk):
         top = max(top, sv[j])
-    rank_rtol = prog[20][1]
+    rank_rtol = at(pp, 20)[1]
     kept = 0
-    keep = ws[30]
+    keep = at(wp, 30)
     for j in range(kk):
         keep[1 + j] = 1 if sv[j] > rank_rtol * top else 0
         kept += keep[1 + j]
@@ -229,20 +230,20 @@ def min_norm(low, sv, uo, vo, keep, residual, out):
 
 
 @array_inner
-def accelerations(prog, ws, t, q, u, udot, rank0, fstats):
+def accelerations(pp, wp, t, q, u, udot, rank0, fstats):
     """udot = the accelerations at (t, q, u) (λ in ws[34]); SINGULAR when the rank of G fell
     below ``rank0`` (≥ 0), fstats[2] the smallest σ_min/σ_max kept."""
-    kinematics(prog, q, u, ws)
-    applied(prog, t, q, u, ws)
-    g = ws[23]
+    kinematics(pp, q, u, wp)
+    applied(pp, t, q, u, wp)
+    g = at(wp, 23)
     m = g.shape[0]
     if m == 0:
-        return OK if aba(prog, ws, udot) else LINALG
-    h, tau, low, gdot, sv, uo, keep, lam, rr = (ws[35], ws[12], ws[25], ws[20], ws[29],
-                                                ws[31], ws[30], ws[34], ws[36])
+        return OK if aba(pp, wp, udot) else LINALG
+    h, tau, low, gdot, sv = at(wp, 35), at(wp, 12), at(wp, 25), at(wp, 20), at(wp, 29)
+    uo, keep, lam, rr = at(wp, 31), at(wp, 30), at(wp, 34), at(wp, 36)
     nv = h.shape[0]
-    bias(prog, ws, h)
-    if not factor(prog, ws):
+    bias(pp, wp, h)
+    if not factor(pp, wp):
         return LINALG
     for i in range(nv):
         udot[i] = tau[i] - h[i]

@@ -11,12 +11,13 @@ p^A + I^a c + U D⁻¹ ũ (c the joint's bias acceleration); outward, u̇ = D⁻
 
 from __future__ import annotations
 
-from massprops.dynamics.compiled.jit import array_inner
+from massprops.dynamics.compiled.jit import array_inner, inlined
 from massprops.dynamics.compiled.systems_linalg import cholesky, lower_solve, upper_solve
 from massprops.dynamics.compiled.systems_tree import force_cross
+from massprops.dynamics.compiled.unowned import at
 
 
-@array_inner
+@inlined
 def _net(vel, sp, fext, i, out, iv):
     """out = V_i ×f (I_i V_i) − f_ext,i (iv scratch 6)."""
     for r in range(6):
@@ -30,18 +31,18 @@ def _net(vel, sp, fext, i, out, iv):
 
 
 @array_inner
-def aba(prog, ws, udot):
+def aba(pp, wp, udot):
     """udot (nv,) = M⁻¹ (τ − h) of a tree without loops."""
-    ji = prog[1]
-    acc, sp, s, cb, tau = ws[3], ws[4], ws[5], ws[7], ws[12]
-    ia, pa, uu, dinv, un = ws[13], ws[14], ws[15], ws[16], ws[17]
-    v6, m6 = ws[10], ws[18]
+    ji = at(pp, 1)
+    acc, sp, s, cb, tau = at(wp, 3), at(wp, 4), at(wp, 5), at(wp, 7), at(wp, 12)
+    ia, pa, uu, dinv, un = at(wp, 13), at(wp, 14), at(wp, 15), at(wp, 16), at(wp, 17)
+    v6, m6 = at(wp, 10), at(wp, 18)
     n = sp.shape[0]
     for i in range(n):
         for r in range(6):
             for c in range(6):
                 ia[i, r, c] = sp[i, r, c]
-        _net(ws[2], ws[4], ws[11], i, pa[i], v6[0])
+        _net(at(wp, 2), at(wp, 4), at(wp, 11), i, pa[i], v6[0])
     low, tmp = m6[0], m6[1]
     for k in range(ji.shape[0] - 1, -1, -1):
         par, ch, iu, nvj = ji[k, 1], ji[k, 2], ji[k, 4], ji[k, 6]
@@ -118,14 +119,14 @@ def aba(prog, ws, udot):
 
 
 @array_inner
-def bias(prog, ws, h):
+def bias(pp, wp, h):
     """h (nv,) = Sᵀ of the transmitted forces I A₀ + V ×f I V − f_ext summed over each
     subtree (RNEA at u̇ = 0); uses the kinematics' A (u̇ = 0)."""
-    ji = prog[1]
-    acc, sp, s, pa, v6 = ws[3], ws[4], ws[5], ws[14], ws[10]
+    ji = at(pp, 1)
+    acc, sp, s, pa, v6 = at(wp, 3), at(wp, 4), at(wp, 5), at(wp, 14), at(wp, 10)
     n = sp.shape[0]
     for i in range(n):
-        _net(ws[2], ws[4], ws[11], i, pa[i], v6[0])
+        _net(at(wp, 2), at(wp, 4), at(wp, 11), i, pa[i], v6[0])
         for r in range(6):
             for c in range(6):
                 pa[i, r] += sp[i, r, c] * acc[i, c]
@@ -144,10 +145,10 @@ def bias(prog, ws, h):
 
 
 @array_inner
-def crba(prog, ws, mass):
+def crba(pp, wp, mass):
     """mass (nv, nv) = the joint-space mass matrix (composite rigid bodies)."""
-    ji, pjoint = prog[1], prog[6]
-    sp, s, comp, v6 = ws[4], ws[5], ws[13], ws[10]
+    ji, pjoint = at(pp, 1), at(pp, 6)
+    sp, s, comp, v6 = at(wp, 4), at(wp, 5), at(wp, 13), at(wp, 10)
     n = sp.shape[0]
     for i in range(n):
         for r in range(6):
