@@ -73,9 +73,10 @@ def reason_of(line: str) -> str:
     return "other"
 
 
-def judge(proc: subprocess.CompletedProcess, expect: str) -> str:
-    """'ok', 'refused (...)', 'review (...)' (a valid scene refused in one line) or what is
-    wrong (upper case)."""
+def judge(proc: subprocess.CompletedProcess, expect: str, scene: str = "") -> str:
+    """'ok', 'refused (...)', 'review (...)' (a valid scene refused in one line, or a result
+    whose own error estimate is >= 1) or what is wrong (upper case). ``scene``: the scene's
+    path, which a refusal's line should name (noted when it does not)."""
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     if any("Traceback" in line for line in lines):
         return "TRACEBACK"
@@ -87,11 +88,12 @@ def judge(proc: subprocess.CompletedProcess, expect: str) -> str:
         if errors:
             return "ERROR LINE ON SUCCESS"
         try:
-            json.loads(proc.stdout, parse_constant=_reject)
+            doc = json.loads(proc.stdout, parse_constant=_reject)
         except ValueError as exc:
             return f"BAD JSON ({str(exc)[:60]})"
-        return {"run": "ok", "usage": "RAN A REFUSED METHOD",
-                "invalid": "ACCEPTED AN INVALID SCENE"}[expect]
+        if expect != "run":
+            return {"usage": "RAN A REFUSED METHOD", "invalid": "ACCEPTED AN INVALID SCENE"}[expect]
+        return "review (0: error estimate >= 1)" if _blown_up(doc) else "ok"
     if code not in (1, 2, 3):
         return f"EXIT {code}"
     if len(errors) != 1:
@@ -102,7 +104,15 @@ def judge(proc: subprocess.CompletedProcess, expect: str) -> str:
         return "refused (2: method)" if code == 2 else f"EXIT {code} FOR A REFUSED METHOD"
     if code == 1:
         return "review (1: valid scene refused)"
-    return f"refused ({code}: {reason_of(errors[0])})"
+    unnamed = "" if scene in errors[0] else "; no file named"
+    return f"refused ({code}: {reason_of(errors[0])}{unnamed})"
+
+
+def _blown_up(doc: dict) -> bool:
+    """True when a simulate result's own error estimate says it is meaningless (>= 1: the
+    contract's metric is relative, so 1 is an error as large as the motion)."""
+    estimate = doc.get("diagnostics", {}).get("error_estimate") if isinstance(doc, dict) else None
+    return isinstance(estimate, (int, float)) and estimate >= 1
 
 
 def commands(rng: np.random.Generator, case: int, path: Path, args) -> list[tuple[str, list]]:
@@ -168,7 +178,7 @@ def main() -> None:
                 pool.map(work, jobs), 1):
             if proc == "skipped":
                 continue
-            verdict = "HANG" if proc is None else judge(proc, expect)
+            verdict = "HANG" if proc is None else judge(proc, expect, str(path))
             said = "" if proc is None else (proc.stderr.strip().splitlines() or [""])[-1]
             log.write(f"{path.name} {what} [{label}] {spent:.1f} s {verdict} | {said[:200]}\n")
             log.flush()
@@ -177,7 +187,8 @@ def main() -> None:
             done_runs.append(f"{what} {path}")
             where = f"{what} {path} [{label}] {' '.join(argv[2:])}"
             if verdict.startswith("review"):
-                review.append((where, proc.stderr.strip()[:300]))
+                review.append((where, proc.stderr.strip()[:300] or verdict))
+                path.with_suffix(f".{what}.stdout").write_text(proc.stdout[:100_000])
             elif not (verdict == "ok" or verdict.startswith("refused")):
                 bad.append((where, verdict))
                 if proc is not None:
