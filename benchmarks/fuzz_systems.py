@@ -57,7 +57,8 @@ REASONS = (("would take", "bound: refused"), ("output samples", "bound: samples"
            ("stopped at", "bound: stopped"), ("max-steps", "bound"),
            ("reference run failed", "reference failed"), ("diverged", "diverged"),
            ("singular", "singular pose"), ("stability", "explicit step unstable"),
-           ("Newton", "Newton failed"), ("does not apply", "method refused"),
+           ("cannot be closed", "loop not closed"), ("Newton", "Newton failed"),
+           ("does not apply", "method refused"),
            ("below round-off", "rtol below round-off"))
 
 
