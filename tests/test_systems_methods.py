@@ -225,3 +225,56 @@ def test_cli_precision_on_a_robot_description(run):
     runs = json.loads(result.stdout)["runs"]
     assert {r["integrator"] for r in runs} == {"dop853"} and len(runs) >= 4
     assert runs[-1]["error"] < 1e-3 * runs[0]["error"]  # the ladder converges
+
+
+def _rod(mass: float, moment: float, z: float, load: str, duration: float,
+         gravity: bool = True) -> str:
+    """A rod on a hinge about y at the origin, its centre at (0, 0, z), starting at 1 rad/s."""
+    return (f"bodies:\n  rod: {{mass: {mass}, inertia: [[{moment}, 0, 0], [0, {moment}, 0], "
+            f"[0, 0, {moment / 100}]], position: [0, 0, {z}]}}\njoints:\n  - {{name: A, type: "
+            f"revolute, bodies: [world, rod], point: [0, 0, 0], axis: [0, 1, 0], {load}}}\n"
+            "initial: {rates: {A: 1.0}}\n"
+            + ("forces: [{type: gravity, g: [0, 0, -9.81]}]\n" if gravity else "")
+            + f"time: {{duration: {duration}}}\n")
+
+
+@pytest.mark.parametrize("z, gravity", [(-0.5, False), (-0.1, True)])
+def test_a_diverged_run_is_not_a_result(z, gravity):
+    """RK4 at h ρ ~ 2000 on a stiff hinge (found by benchmarks/fuzz_systems.py): its angles grew
+    to 4e34 rad and the run was reported as a result (the first case), or it ended saying the
+    mass matrix was not positive definite. Now either is a one-line divergence that says what
+    to do: the energy of a system that cannot gain any grew, or the state went wild."""
+    scene = parse_system(_rod(1e-3, 1e-4, z, "stiffness: 1.0e9", 1.0, gravity),
+                         source="rod.yaml", base_dir=SAMPLES)
+    with pytest.raises(ComputationError, match="rk4 run diverged.*implicit") as info:
+        simulate_system(scene, integrator="rk4", step=1e-3, estimate=False)
+    assert "\n" not in str(info.value)
+
+
+def test_an_unmeasurable_fast_mode_leaves_no_estimate():
+    """A hinge damper at c / I ~ 1e11/s under Radau at 1 ms (fuzz_systems): the probe's
+    resolving run cannot be made within its bound, so the estimate is unknown (None), not inf
+    (which the JSON writer refused: an internal error)."""
+    import json
+
+    scene = parse_system(_rod(1.0, 1e-3, -0.1, "damping: 1.0e9", 1.0), source="rod.yaml",
+                         base_dir=SAMPLES)
+    run = simulate_system(scene, integrator="implicit", step=1e-3)
+    assert run.diagnostics["error_estimate"] is None
+    json.dumps(run.as_dict(), allow_nan=False)
+
+
+@pytest.mark.slow  # ~7 s: the stiff reference and the bounded dop853 rung
+def test_precision_on_a_stiff_system_ends():
+    """A damper with a ~1e-13 s time constant over 2 ms (fuzz_systems): precision ran for
+    hours; now its reference is Radau at a fine step (as for one body) and a rung that hits the
+    run bound ends its ladder."""
+    from massprops.dynamics.systems.precision import precision_system
+
+    scene = parse_system(_rod(1e-6, 1e-12, -0.001, "damping: 0.1", 0.002), source="rod.yaml",
+                         base_dir=SAMPLES)
+    report = precision_system(scene).as_dict()
+    assert report["reference"]["integrator"] == "implicit"
+    dop853 = [r for r in report["runs"] if r["integrator"] == "dop853"]
+    assert len(dop853) == 1 and "run bound" in dop853[0]["reason"]
+    assert any(r["integrator"] == "implicit" and r["error"] is not None for r in report["runs"])

@@ -18,7 +18,8 @@ correction η‖Δ‖ is below NEWTON_TOL, or the correction is at round-off. Wh
 the step is taken again in 2, 4, ... MAX_PIECES pieces, each a full step (projected, tested);
 beyond that the run stops with UNDERFLOW.
 
-istats and fstats as in `systems_dop853` (istats[2]: steps taken again in pieces).
+istats and fstats as in `systems_dop853`: istats[0] the steps taken (each piece one), istats[2]
+the pieces tried and taken again smaller; the run bound counts both (each costs a Jacobian).
 """
 
 from __future__ import annotations
@@ -106,9 +107,6 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
     for i in range(m):
         ta = t0 + i * h
         tb = t1 if i == m - 1 else t0 + (i + 1) * h
-        if istats[0] >= max_steps:
-            fail(istats, fstats, yfail, STEP_LIMIT, ta, y)
-            return
         for c in range(n):
             ya[c], k[0, c] = y[c], fa[c]  # the step's start, kept for a retry in pieces
         kout0 = istats[4]
@@ -116,14 +114,19 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
         while True:
             status = OK
             for p in range(pieces):
+                if istats[0] + istats[2] >= max_steps:  # every piece tried counts: a Jacobian
+                    fail(istats, fstats, yfail, STEP_LIMIT, ta, y)
+                    return
                 tp = ta + (tb - ta) * p / pieces
                 tq = tb if p == pieces - 1 else ta + (tb - ta) * (p + 1) / pieces
                 status = _step(prog, ws, pp, wp, scratch, arrays, method, tp, tq, tw, rank0)
                 if status != OK:
                     break
+                istats[0] += 1
             if status != NEWTON_FAILED:
                 break
-            istats[2] += 1
+            istats[0] -= p  # the p pieces accepted before the one that failed, and that one,
+            istats[2] += p + 1  # are taken again smaller: tried, not steps
             pieces *= 2
             if pieces > MAX_PIECES:
                 fail(istats, fstats, yfail, UNDERFLOW, ta, ya)
@@ -133,7 +136,6 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
             istats[4] = kout0
         if status != OK:
             return  # _step recorded the failure
-        istats[0] += 1
 
 
 @array_inner
@@ -157,7 +159,9 @@ def _step(prog, ws, pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
             istats[1] += evals
     if status == NEWTON_FAILED:
         return status
-    if (status == OK or status == LINALG) and not _finite(ynew):  # NaN reaches M first
+    if status == LINALG or (status == OK and not _finite(ynew)):
+        # M stops being positive definite only at a state gone wild (NaN or 1e300 angles
+        # reach M first); the implicit methods' iterates gone wild are NEWTON_FAILED already
         status = DIVERGED
     if status != OK:
         fail(istats, fstats, yfail, status, tb, ynew)

@@ -34,6 +34,10 @@ NARROW_RTOL = 1e-12
 steps are short enough to land within NEAR_SINGULAR_MARGIN of the pose (the parallelogram
 four-bar's flat pose to 1e-6 s where steps at rtol 1e-9 span 0.25-0.72 s)."""
 
+UNCLOSED_WILD = 1e3
+"""A loop that cannot be closed by more than this many system sizes was not near a pose that
+does not assemble: the state went wild (RK4 at 8 s steps: a residual of 4.5e49 m)."""
+
 NARROW_RUNS = 3
 """Fine runs at most, each over the shorter crossing step the previous one found."""
 
@@ -130,7 +134,8 @@ def _jumped(system, low: float, high: float, method: str) -> BaseException:
     stretch does not reach: the step, not the mechanism, is at fault."""
     fix = (f"tighten {setting_ref('rtol')}" if method == "dop853"
            else f"shorten {setting_ref('step')}")
-    return ArithmeticError(f"the {method} step from t = {low:.6g} to {high:.6g} s jumped the "
+    return ArithmeticError(f"{system.scene.source}: the {method} step from t = {low:.6g} to "
+                           f"{high:.6g} s jumped the "
                            "loop across a singular pose that the motion does not reach (a run "
                            f"at rtol {NARROW_RTOL:g} passes there); {fix}")
 
@@ -138,29 +143,37 @@ def _jumped(system, low: float, high: float, method: str) -> BaseException:
 def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: int,
              method: str) -> BaseException:
     """The exception of a kernel's failure ``status`` at fstats[3] (see systems_dop853)."""
-    t = float(fstats[3])
+    t, source = float(fstats[3]), system.scene.source
     fewer = (f"loosen {setting_ref('rtol')}" if method == "dop853"
              else f"lengthen {setting_ref('step')}")
+    wild = (f"{source}: the {method} run diverged at t = {t:.6g} s: its step is beyond the "
+            f"method's stability there; "
+            + (f"shorten {setting_ref('step')} or " if method != "dop853" else "")
+            + f"run the implicit method ({setting_ref('integrator')})")
     if status == codes.UNDERFLOW:
         if method != "dop853":  # the fixed-step kernels' Newton failed in MAX_PIECES pieces
-            return ArithmeticError(f"{method}'s Newton iterations failed at t = {t:.6g} s even "
-                                   f"in {MAX_PIECES} pieces of the step; shorten "
-                                   f"{setting_ref('step')}")
-        return ArithmeticError(f"step size underflow at t = {t:.6g} s")
+            return ArithmeticError(f"{source}: {method}'s Newton iterations failed at "
+                                   f"t = {t:.6g} s even in {MAX_PIECES} pieces of the step; "
+                                   f"shorten {setting_ref('step')}")
+        return ArithmeticError(f"{source}: dop853's step fell to round-off at t = {t:.6g} s "
+                               "(every trial step failed or was rejected): the system is "
+                               "too stiff or singular there for an explicit method; run the "
+                               f"implicit method ({setting_ref('integrator')})")
     if status == DIVERGED:
-        return ArithmeticError(f"the {method} run diverged at t = {t:.6g} s: its step is beyond "
-                               f"the method's stability there; shorten {setting_ref('step')} or "
-                               f"run the implicit method ({setting_ref('integrator')})")
+        return ArithmeticError(wild)
     if status == codes.STEP_LIMIT:
-        return RunBudgetError(f"{system.scene.source}: the run took {max_steps} steps by "
+        return RunBudgetError(f"{source}: the run took {max_steps} steps by "
                               f"t = {t:.6g} s, the run bound ({setting_ref('max_steps')}); "
                               f"raise it or {fewer}")
-    if status == codes.LINALG:
-        return np.linalg.LinAlgError("Matrix is not positive definite")
+    if status == codes.LINALG:  # M is positive definite at any finite state of a valid scene
+        return ArithmeticError(wild.replace("diverged", "went wild (its mass matrix lost "
+                                            "positive definiteness)", 1))
     if status == codes.CROSSED:
         since = float(fstats[4])  # == t: an accepted state at the pose (NEAR_SINGULAR_MARGIN)
         return SingularPose(system.singular_message(t, np.zeros((system.m, 0)),
                                                     since=None if since == t else since))
+    if status == codes.UNCLOSED and not fstats[5] < UNCLOSED_WILD * system.tree.size:
+        return ArithmeticError(wild)  # a residual many sizes long: the step, not the loop
     if status == codes.UNCLOSED:
         return SingularPose(f"{system.scene.source}: the joints cannot be closed at "
                             f"t = {t:.6g} s (position residual {fstats[5]:.3g} m after "

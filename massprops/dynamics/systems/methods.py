@@ -9,6 +9,8 @@ all bodies (`outputs.distance`).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from massprops.dynamics.accuracy import companion_settings, global_estimate
@@ -52,7 +54,7 @@ def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
             reason or REASONS[name]
     h = step if step is not None else scene.time.step
     if h is None:
-        h = default_step(system, y0, scene.time.duration, stiff=name == "implicit")
+        h = default_step(system, y0, scene.time.duration, stiff=name in STIFF_METHODS)
     return name, float(h), reason or REASONS[name]
 
 
@@ -60,6 +62,9 @@ def _sprung(scene) -> bool:
     """A spring or damper anywhere (between bodies or on a joint): the only stiff terms."""
     return bool(scene.springs) or any(j.stiffness or j.damping for j in scene.joints)
 
+
+STIFF_METHODS = ("implicit", "midpoint")
+"""The A-stable ones (the registry's ``stiff``): their default step ignores the fast rates."""
 
 STEPS_PER_RUN = 1000
 """A fixed step the scene does not give: the duration / this, shortened for an explicit method
@@ -96,9 +101,12 @@ def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
         credit = spec.order
     estimate = global_estimate(spec.kind, spec.order, d_run, d_companions, credit)
     if spec.stiff:  # a fast mode all three runs damp or alias alike: measured apart
-        estimate = max(estimate, unresolved_mode_error(system, y0, name, setting, floors,
-                                                       windows, t_out, samples, limit))
-    return estimate
+        probe = unresolved_mode_error(system, y0, name, setting, floors, windows, t_out,
+                                      samples, limit)
+        if not math.isfinite(probe):  # the resolving run could not be made: size unknown
+            return None
+        estimate = max(estimate, probe)
+    return estimate if math.isfinite(estimate) else None
 
 
 def default_step(system: System, y0: np.ndarray, duration: float, *, stiff: bool) -> float:

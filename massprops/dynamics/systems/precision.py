@@ -1,7 +1,7 @@
 """`massprops precision` on a system: every method a system runs with (`methods`), dop853 over a
 ladder of tolerances and rk4, midpoint and implicit over ladders of halving steps, each run's
-error in the contract's metric against a reference run at rtol 1e-13 whose own accuracy is
-measured against a run at 1e-12 (self-consistency), next to its error estimate.
+error in the contract's metric against a reference run (`reference_run`: dop853 at rtol 1e-13
+checked against 1e-12; Radau IIA at a fine step for a stiff system), next to its estimate.
 
 A ladder stops as the one-body ladders do (`dynamics.precision`): once a run is within
 AT_REFERENCE of the reference's accuracy, or took longer than MAX_RUN_S.
@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
+from massprops.dynamics.accuracy import global_estimate
 from massprops.dynamics.precision import (
     AT_REFERENCE,
     MAX_RUN_S,
@@ -19,19 +20,29 @@ from massprops.dynamics.precision import (
     PrecisionReport,
     PrecisionRun,
 )
-from massprops.dynamics.systems.methods import SYSTEM_INTEGRATORS, default_step
+from massprops.dynamics.systems.methods import (
+    STIFF_METHODS,
+    SYSTEM_INTEGRATORS,
+    choose,
+    default_step,
+)
 from massprops.dynamics.systems.model import SystemScene
 from massprops.dynamics.systems.outputs import distance
 from massprops.dynamics.systems.run import prepare, simulate_system
-from massprops.errors import MassPropsError, UsageError
+from massprops.errors import ComputationError, MassPropsError, RunBudgetError, UsageError
 
 RTOL_LADDER = tuple(10.0**-k for k in range(4, 12))
 """Settings, loose to tight; the reference runs at REFERENCE_RTOL."""
 
 REFERENCE_RTOL, CHECK_RTOL = 1e-13, 1e-12
 
+MAX_REFERENCE_STEPS = 2_000_000
+"""The reference runs' bound: the truth may take longer than a rung."""
+
 MAX_LADDER_STEPS = 200_000
-"""Fixed steps that would take more steps than this are left out of a ladder."""
+"""Fixed steps that would take more steps than this are left out of a ladder, and every rung
+stops at this many steps (the run bound): a method that cannot follow the system over its
+duration fails that rung and its ladder ends, instead of running for hours."""
 
 
 def ladder(scene: SystemScene, name: str) -> list[float]:
@@ -40,7 +51,7 @@ def ladder(scene: SystemScene, name: str) -> list[float]:
     if name == "dop853":
         return list(RTOL_LADDER)
     system, y0, _ = prepare(scene)
-    h0 = 16.0 * default_step(system, y0, scene.time.duration, stiff=name == "implicit")
+    h0 = 16.0 * default_step(system, y0, scene.time.duration, stiff=name in STIFF_METHODS)
     steps = [h0 / 2**k for k in range(STEP_HALVINGS)]
     return [h for h in steps if scene.time.duration / h <= MAX_LADDER_STEPS]
 
@@ -58,13 +69,7 @@ def precision_system(scene: SystemScene, integrators: Sequence[str] | None = Non
                              f"to a system; applicable: {', '.join(names)}")
         names = [n for n in names if n in integrators]
     every = scene.time.duration / SAMPLES
-    ref = simulate_system(scene, rtol=REFERENCE_RTOL, every=every, estimate=False,
-                          notice=notice)
-    check = simulate_system(scene, rtol=CHECK_RTOL, every=every, estimate=False)
-    size = scene.size
-    reference = {"kind": "run", "integrator": "dop853", "setting": REFERENCE_RTOL,
-                 "accuracy": distance(check.samples, ref.samples, size),
-                 "checked": f"self-consistency: its distance to a run at rtol {CHECK_RTOL:g}"}
+    ref, reference = reference_run(scene, every, notice)
     plan = [(n, s) for n in names for s in ladder(scene, n)]
     runs: list[PrecisionRun] = []
     done: set[str] = set()
@@ -76,14 +81,49 @@ def precision_system(scene: SystemScene, integrators: Sequence[str] | None = Non
         kind = "rtol" if name == "dop853" else "step_s"
         try:
             run = simulate_system(scene, integrator=name, rtol=setting, step=setting,
-                                  every=every)
+                                  every=every, max_steps=MAX_LADDER_STEPS)
         except MassPropsError as exc:  # a step beyond stability, Newton failing, ...
             why = exc.template.removeprefix(f"{scene.source}: ")  # settings said by the caller
             runs.append(PrecisionRun(name, setting, kind, None, None, None, 0, 0, why))
+            if isinstance(exc, RunBudgetError):  # finer settings take more steps still
+                done.add(name)
             continue
-        error = distance(run.samples, ref.samples, size)
+        error = distance(run.samples, ref.samples, scene.size)
         runs.append(PrecisionRun(name, setting, kind, run.wall_time_s, error,
                                  run.diagnostics["error_estimate"], run.steps, run.evaluations))
         if error < AT_REFERENCE * reference["accuracy"] or run.wall_time_s > MAX_RUN_S:
             done.add(name)
     return PrecisionReport(reference, tuple(runs))
+
+
+def reference_run(scene: SystemScene, every: float, notice=None):
+    """(run, description) of the truth the ladders are measured against, as for one body
+    (`dynamics.precision.reference_run`): dop853 at REFERENCE_RTOL, its accuracy its distance
+    to a run at CHECK_RTOL; for a stiff system (where `auto` takes implicit) Radau IIA at a
+    quarter of its ladder's finest step, checked against 2 and 4 times that step by
+    Richardson's rule (dop853 would need the stiff rate's steps)."""
+    system, y0, _ = prepare(scene)
+    stiff = choose(system, y0, "auto", None, None)[0] == "implicit"
+    method = "implicit" if stiff else "dop853"
+    fine = ladder(scene, "implicit")[-1] / 4 if stiff else REFERENCE_RTOL
+    settings = (fine, 2 * fine, 4 * fine) if stiff else (fine, CHECK_RTOL)
+    try:
+        runs = [simulate_system(scene, integrator=method, rtol=x, step=x, every=every,
+                                estimate=False, notice=notice, max_steps=MAX_REFERENCE_STEPS)
+                for x in settings]
+    except RunBudgetError as exc:
+        raise ComputationError(f"{scene.source}: the reference run ({method} at "
+                               f"{'step' if stiff else 'rtol'} {fine:g}) needs more than "
+                               f"{MAX_REFERENCE_STEPS} steps: the system is too stiff over its "
+                               "duration to be measured; shorten time.duration") from exc
+    size = scene.size
+    if stiff:
+        accuracy = global_estimate("fixed", 5, distance(runs[0].samples, runs[1].samples, size),
+                                   distance(runs[1].samples, runs[2].samples, size), 3)
+        how = (f"implicit at step {fine:.3g} s against steps {2 * fine:.3g} s and "
+               f"{4 * fine:.3g} s (Richardson with the observed order)")
+    else:
+        accuracy = distance(runs[1].samples, runs[0].samples, size)
+        how = f"self-consistency: its distance to a run at rtol {CHECK_RTOL:g}"
+    return runs[0], {"kind": "run", "integrator": method, "setting": fine,
+                     "accuracy": accuracy, "checked": how}

@@ -20,6 +20,10 @@ from massprops.dynamics.stiffness import PROBE_PERIODS, PROBE_RTOL, PROBE_SAMPLE
 from massprops.dynamics.systems.integrate import integrate
 from massprops.dynamics.systems.outputs import Samples, distance, evaluate_states
 
+PROBE_MAX_STEPS = 100_000
+"""Steps the probe's runs may take: a rate of 1e12/s (a damper on a tiny inertia) would need
+~1e9 DOP853 steps over the window, minutes or more; beyond this the estimate is unknown (None)."""
+
 
 def fastest_rate(system, y0: np.ndarray) -> float:
     """ρ(∂ẏ/∂y) at (0, y0), 1/s: the spectral radius of the right-hand side's Jacobian by
@@ -49,7 +53,8 @@ def unresolved_mode_error(system, y0: np.ndarray, name: str, h: float, floors: n
     """The error (`outputs.distance` in the scales of ``samples``, the whole run) of method
     ``name`` at step ``h`` against dop853 at PROBE_RTOL over [0, W], W = PROBE_STEPS steps or
     PROBE_PERIODS periods 2π/ρ, whichever is longer (on the run's own step grid, within the
-    duration); 0 where h ρ ≤ 1, inf where either run fails (no estimate then)."""
+    duration); 0 where h ρ ≤ 1, inf where either run fails or needs more than PROBE_MAX_STEPS
+    (no estimate then)."""
     rate = fastest_rate(system, y0)
     if h * rate <= 1.0:
         return 0.0
@@ -59,7 +64,8 @@ def unresolved_mode_error(system, y0: np.ndarray, name: str, h: float, floors: n
     t_probe = np.union1d(np.linspace(0.5 * window, window, PROBE_SAMPLES),
                          t_out[t_out <= window])
     inside = windows[windows < window]
-    runs = [integrate(system, y0, t_probe, setting, floors, inside, limit, method)
+    bound = min(limit, PROBE_MAX_STEPS)
+    runs = [integrate(system, y0, t_probe, setting, floors, inside, bound, method)
             for method, setting in ((name, h), ("dop853", PROBE_RTOL))]
     if any(run.failure is not None for run in runs):
         return math.inf
