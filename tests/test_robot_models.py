@@ -5,6 +5,7 @@ hand (closed forms, exact fractions, parallel axes written out here), round trip
 from __future__ import annotations
 
 import math
+import os
 import re
 import shutil
 from fractions import Fraction
@@ -234,8 +235,9 @@ def _strip_inertials(text: str) -> str:
 @pytest.mark.parametrize("density", [(), ("--density", "1234.5")], ids=["kept", "density"])
 @pytest.mark.parametrize("path", [ARM, BASE, GRIPPER], ids=["urdf", "sdf", "mjcf"])
 def test_write_then_check_1e12(run, path, density):
-    # written beside the input so that its relative mesh paths still resolve
-    out = path.with_name("massprops-test-out" + path.suffix)
+    # written beside the input so that its relative mesh paths still resolve; named per
+    # process, as xdist's workers run the other parameters at the same time
+    out = path.with_name(f"massprops-test-out-{os.getpid()}{path.suffix}")
     try:
         res = run("model", "--write", out, *density, path)
         assert res.exit_code == 0, res.stderr
@@ -289,7 +291,7 @@ def test_wrong_inertial_fails_check_with_exit_4(run, field, new):
         text = text.replace('<mass value="1.2"/>', '<mass value="1.3"/>')
     else:
         text = text.replace('xyz="0.0877583 0.0479426 0"', 'xyz="0.0877583 0.0479426 0.02"')
-    bad = ARM.with_name("massprops-test-bad.urdf")
+    bad = ARM.with_name(f"massprops-test-bad-{os.getpid()}.urdf")  # per process: see above
     bad.write_text(text)
     try:
         res = run("model", "--check", "0.05", "--json", bad)
