@@ -2,10 +2,10 @@
 the systems' one compiled entry (`systems_kernel.run_segment`).
 
 The method of `dynamics.systems.integrate` (the project's tableau, dop853.f's error norm and step
-control): after each accepted step the quaternions are renormalised and (q, u) projected onto
-Φ = 0, Φ̇ = 0 (`systems_step.project`), f is evaluated at the projected end (FSAL), the singular
-pose test runs (`systems_step.accept`), and where output times fall inside the step the dense
-output is built from its start and its projected end and each sample projected in turn.
+control): after each accepted step what every method does (`systems_step.settle`: the end
+projected onto Φ = 0, Φ̇ = 0 and renormalised, f evaluated there (FSAL), the singular-pose
+test), and where output times fall inside the step the dense output is built from its start
+and its projected end and each sample projected in turn (`systems_step.project_sample`).
 
 istats: [steps, evaluations, rejected, status, next output index, rank of the last accepted
 step's B (-1: none yet), rank of G at the start (-1: unchecked)]; fstats: [largest position
@@ -28,17 +28,16 @@ from massprops.dynamics.compiled.systems_step import (
     STEP_LIMIT,
     UNDERFLOW,
     accept,
-    normalize,
-    project,
+    fail,
+    project_sample,
     rhs_ref,
+    settle,
 )
 from massprops.dynamics.compiled.unowned import by_ref
 from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, C, D
 
 E3 = B - BHH
 SAFE, FAC_MIN, FAC_MAX = 0.9, 1.0 / 3.0, 6.0
-PROJECT_ITERATIONS = 12
-"""Newton steps of the post-step projection (System.project's default)."""
 
 
 @array_inner
@@ -49,14 +48,6 @@ def _stage(y, h, k, s, out):
         for j in range(s):
             x += A[s, j] * k[j, i]
         out[i] = y[i] + h * x
-
-
-@array_inner
-def fail(istats, fstats, yfail, status, t, y):
-    istats[3] = status
-    fstats[3] = t
-    for i in range(y.size):
-        yfail[i] = y[i]
 
 
 @inlined
@@ -151,23 +142,8 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
             err = math.inf
         if err <= 1.0:
             t_new = t1 if last else t + h
-            status = project(prog, ws, ynew, PROJECT_ITERATIONS, moved)
-            if status != OK:
-                fstats[5] = moved[2]
-                fail(istats, fstats, yfail, status, t_last, ynew)
-                return
-            normalize(prog, ynew[:prog[0][0]])
-            fstats[0] = max(fstats[0], moved[0])
-            fstats[1] = max(fstats[1], moved[1])
-            t_last = t_new
-            status = rhs_ref(pp, wp, tw, ynew, k[12], rank0, fstats)
-            istats[1] += 1
-            if status != OK:
-                fail(istats, fstats, yfail, status, t_new, ynew)
-                return
-            if accept(prog, ws, acc_b, acc_u, istats, fstats, t_new) == CROSSED:
-                fstats[4] = t if fstats[6] > prog[20][3] else t_new  # at t_new: reached it
-                fail(istats, fstats, yfail, CROSSED, t_new, ynew)
+            if settle(prog, ws, pp, wp, ynew, k[12], t, t_new, tw, moved, istats, fstats,
+                      acc_b, acc_u, yfail) != OK:
                 return
             kout = istats[4]
             if kout < nout and t_out[kout] <= t_new:
@@ -183,10 +159,8 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
                 while kout < nout and t_out[kout] <= t_new:
                     row = y_out[kout]
                     _dense_row(cont, (t_out[kout] - t) / h, row)
-                    status = project(prog, ws, row, PROJECT_ITERATIONS, moved)
-                    if status != OK:
-                        fstats[5] = moved[2]
-                        fail(istats, fstats, yfail, status, t_last, row)
+                    if project_sample(prog, ws, row, t_out[kout], moved, istats, fstats,
+                                      yfail) != OK:
                         return
                     kout += 1
                 istats[4] = kout

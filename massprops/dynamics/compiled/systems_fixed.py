@@ -29,7 +29,6 @@ import math
 import numpy as np
 
 from massprops.dynamics.compiled.jit import array_inner, inlined
-from massprops.dynamics.compiled.systems_dop853 import PROJECT_ITERATIONS, fail
 from massprops.dynamics.compiled.systems_loops import LINALG
 from massprops.dynamics.compiled.systems_step import (
     CROSSED,
@@ -37,9 +36,10 @@ from massprops.dynamics.compiled.systems_step import (
     STEP_LIMIT,
     UNDERFLOW,
     accept,
-    normalize,
-    project,
+    fail,
+    project_sample,
     rhs_ref,
+    settle,
 )
 from massprops.dynamics.compiled.unowned import by_ref
 from massprops.dynamics.integrators._newton import NEWTON_TOL, ROUNDOFF, lu_factor, lu_solve
@@ -60,7 +60,8 @@ MAX_PIECES = 64
 """Pieces a step may be cut into where Newton fails before the run stops."""
 
 DIVERGED = 7
-"""Status: the step's end is not finite (a step beyond an explicit method's stability)."""
+"""Status: the step's end is not finite, or M stopped being positive definite on the way (a
+step beyond an explicit method's stability)."""
 
 NEWTON_FAILED = -1
 """Internal status of a step whose Newton iterations failed (then cut into pieces)."""
@@ -114,10 +115,10 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
         while True:
             status = OK
             for p in range(pieces):
-                if istats[0] + istats[2] >= max_steps:  # every piece tried counts: a Jacobian
-                    fail(istats, fstats, yfail, STEP_LIMIT, ta, y)
-                    return
                 tp = ta + (tb - ta) * p / pieces
+                if istats[0] + istats[2] >= max_steps:  # every piece tried counts: a Jacobian
+                    fail(istats, fstats, yfail, STEP_LIMIT, tp, y)
+                    return
                 tq = tb if p == pieces - 1 else ta + (tb - ta) * (p + 1) / pieces
                 status = _step(prog, ws, pp, wp, scratch, arrays, method, tp, tq, tw, rank0)
                 if status != OK:
@@ -166,31 +167,16 @@ def _step(prog, ws, pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
     if status != OK:
         fail(istats, fstats, yfail, status, tb, ynew)
         return status
-    status = project(prog, ws, ynew, PROJECT_ITERATIONS, moved)
+    status = settle(prog, ws, pp, wp, ynew, fb, ta, tb, tw, moved, istats, fstats, acc_b,
+                    acc_u, yfail)
     if status != OK:
-        fstats[5] = moved[2]
-        fail(istats, fstats, yfail, status, tb, ynew)
         return status
-    normalize(prog, ynew[:prog[0][0]])
-    fstats[0] = max(fstats[0], moved[0])
-    fstats[1] = max(fstats[1], moved[1])
-    status = rhs_ref(pp, wp, tw, ynew, fb, rank0, fstats)
-    istats[1] += 1
-    if status != OK:
-        fail(istats, fstats, yfail, status, tb, ynew)
-        return status
-    if accept(prog, ws, acc_b, acc_u, istats, fstats, tb) == CROSSED:
-        fstats[4] = ta if fstats[6] > prog[20][3] else tb  # at tb: reached it
-        fail(istats, fstats, yfail, CROSSED, tb, ynew)
-        return CROSSED
     kout = istats[4]
     while kout < t_out.size and t_out[kout] <= tb:
         row = y_out[kout]
         _hermite(y, fa, ynew, fb, h, (t_out[kout] - ta) / h, row)
-        status = project(prog, ws, row, PROJECT_ITERATIONS, moved)
+        status = project_sample(prog, ws, row, t_out[kout], moved, istats, fstats, yfail)
         if status != OK:
-            fstats[5] = moved[2]
-            fail(istats, fstats, yfail, status, t_out[kout], row)
             return status
         kout += 1
     istats[4] = kout

@@ -177,26 +177,18 @@ def factor(pp, wp):
         for c in range(nv):
             bm[i, c] = row[c]
     kk = min(m, nv)
-    if nv <= m:
-        for i in range(m):
-            for c in range(nv):
-                x[i, c] = bm[i, c]
-        jacobi_svd(x, m, nv, vs, sv)
-        for j in range(kk):
-            for i in range(m):
-                uo[i, j] = x[i, j] / sv[j] if sv[j] > 0 else 0.0
-            for i in range(nv):
-                vo[i, j] = vs[i, j]
-    else:
-        for i in range(nv):
-            for c in range(m):
-                x[i, c] = bm[c, i]
-        jacobi_svd(x, nv, m, vs, sv)
-        for j in range(kk):
-            for i in range(nv):
-                vo[i, j] = x[i, j] / sv[j] if sv[j] > 0 else 0.0
-            for i in range(m):
-                uo[i, j] = vs[i, j]
+    tall = nv <= m  # the one-sided Jacobi SVD wants rows >= columns: B or Bᵀ
+    rows, cols = (m, nv) if tall else (nv, m)
+    for i in range(rows):
+        for c in range(cols):
+            x[i, c] = bm[i, c] if tall else bm[c, i]
+    jacobi_svd(x, rows, cols, vs, sv)
+    left, right = (uo, vo) if tall else (vo, uo)  # B's U and V, or Bᵀ's (V and U of B)
+    for j in range(kk):
+        for i in range(rows):
+            left[i, j] = x[i, j] / sv[j] if sv[j] > 0 else 0.0
+        for i in range(cols):
+            right[i, j] = vs[i, j]
     top = 0.0
     for j in range(kk):
         top = max(top, sv[j])

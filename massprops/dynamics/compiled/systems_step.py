@@ -19,6 +19,9 @@ from massprops.dynamics.compiled.unowned import at, by_ref
 UNDERFLOW, STEP_LIMIT, CROSSED, UNCLOSED = 1, 2, 4, 5
 """Status codes besides systems_loops' OK, SINGULAR and LINALG."""
 
+PROJECT_ITERATIONS = 12
+"""Newton steps of the post-step projection (System.project's default)."""
+
 
 
 @array_jit
@@ -231,4 +234,52 @@ def accept(prog, ws, acc_b, acc_u, istats, fstats, t):
         for c in range(nv):
             acc_b[i, c] = bm[i, c]
     istats[5] = col
+    return status
+
+
+@array_inner
+def fail(istats, fstats, yfail, status, t, y):
+    """Record a step loop's failure: its status, its time t and the state y where it happened
+    (the layout of `systems_dop853`'s istats and fstats)."""
+    istats[3] = status
+    fstats[3] = t
+    for i in range(y.size):
+        yfail[i] = y[i]
+
+
+@array_inner
+def settle(prog, ws, pp, wp, y, f, t_start, t, tw, moved, istats, fstats, acc_b, acc_u,
+           yfail):
+    """What every method does after an accepted step from t_start to t (s), on its end y:
+    y projected onto Φ = 0, Φ̇ = 0 and its quaternions renormalised, f = ẏ evaluated there
+    (loads judged at tw), the singular-pose test (`accept`). OK, or the failure's status,
+    recorded (`fail`); on CROSSED fstats[4] is where the crossing began (t itself when y is at
+    the pose)."""
+    status = project(prog, ws, y, PROJECT_ITERATIONS, moved)
+    if status != OK:
+        fstats[5] = moved[2]
+        fail(istats, fstats, yfail, status, t, y)
+        return status
+    normalize(prog, y[:prog[0][0]])
+    fstats[0] = max(fstats[0], moved[0])
+    fstats[1] = max(fstats[1], moved[1])
+    status = rhs_ref(pp, wp, tw, y, f, istats[6], fstats)
+    istats[1] += 1
+    if status != OK:
+        fail(istats, fstats, yfail, status, t, y)
+        return status
+    if accept(prog, ws, acc_b, acc_u, istats, fstats, t) == CROSSED:
+        fstats[4] = t_start if fstats[6] > prog[20][3] else t
+        fail(istats, fstats, yfail, CROSSED, t, y)
+        return CROSSED
+    return OK
+
+
+@array_inner
+def project_sample(prog, ws, row, t, moved, istats, fstats, yfail):
+    """A dense-output sample ``row`` (at t) projected in place; OK or the failure, recorded."""
+    status = project(prog, ws, row, PROJECT_ITERATIONS, moved)
+    if status != OK:
+        fstats[5] = moved[2]
+        fail(istats, fstats, yfail, status, t, row)
     return status

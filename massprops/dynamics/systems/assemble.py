@@ -77,15 +77,14 @@ def localized(scene: SystemScene) -> tuple[SystemScene, np.ndarray]:
     ), origin
 
 
+def _loaded(j) -> bool:
+    return j.kind in ONE_AXIS and bool(j.damping or j.stiffness or j.drive)
+
+
 def _priority(scene: SystemScene, k: int) -> int:
     j = scene.joints[k]
     named = j.name in scene.initial.positions or j.name in scene.initial.rates
-    loaded = j.damping or j.stiffness or j.drive
-    return 0 if named else (1 if loaded else 2)
-
-
-def _loaded(j) -> bool:
-    return j.kind in ONE_AXIS and bool(j.damping or j.stiffness or j.drive)
+    return 0 if named else (1 if _loaded(j) else 2)
 
 
 def _grow(scene: SystemScene, order: list, allowed: set | None):

@@ -21,9 +21,9 @@ from __future__ import annotations
 import numpy as np
 
 from massprops.dynamics.compiled import systems_step as codes
-from massprops.dynamics.compiled.systems_dop853 import PROJECT_ITERATIONS
 from massprops.dynamics.compiled.systems_fixed import DIVERGED, MAX_PIECES
 from massprops.dynamics.compiled.systems_kernel import DOP853, METHODS, run_segment
+from massprops.dynamics.compiled.systems_step import PROJECT_ITERATIONS
 from massprops.dynamics.systems.system import SingularPose
 from massprops.errors import RunBudgetError, setting_ref
 
@@ -84,16 +84,15 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors:
         run_segment(system.program, y, t0, t1, float(setting), METHODS[method], within, t_out,
                     run.y_out, istats, fstats, accepted_b, accepted_u, max_steps, yfail)
         if istats[3] != codes.OK:
-            run.failure = None
+            jumped = None
             if istats[3] == codes.CROSSED and fstats[4] < fstats[3]:  # a step jumped across it
                 rtol = float(setting) if method == "dop853" else NARROW_RTOL
                 low, high, seen = _narrow(system, y, float(fstats[4]), float(fstats[3]), rtol,
                                           scales, floors)
                 fstats[4], fstats[3] = low, high
-                if not seen:
-                    run.failure = _jumped(system, low, high, method)
-            if run.failure is None:
-                run.failure = _failure(system, int(istats[3]), fstats, yfail, max_steps, method)
+                jumped = None if seen else _jumped(system, low, high, method)
+            run.failure = jumped or _failure(system, int(istats[3]), fstats, yfail, max_steps,
+                                             method)
             break
         run.t_reached = t1
     run.steps, run.nfev, run.rejected = (int(v) for v in istats[:3])

@@ -29,6 +29,11 @@ REASONS = {"dop853": "adaptive 8th order", "rk4": "fixed step, 4th order",
            "implicit": "fixed step, Radau IIA (L-stable, for stiff systems)"}
 """The JSON's ``reason`` of each method on a system (every one projects after each step)."""
 
+STEPS_PER_RUN = 1000
+"""A fixed step the scene does not give: the duration / this, shortened for an explicit method
+to 0.1 / the fastest rate of the start's linearised motion (default_step says why)."""
+
+
 def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
            step: float | None) -> tuple[str, float, str]:
     """(method, setting, reason) of a run asked for ``name`` (SYSTEM_INTEGRATORS) with the
@@ -54,21 +59,22 @@ def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
             reason or REASONS[name]
     h = step if step is not None else scene.time.step
     if h is None:
-        h = default_step(system, y0, scene.time.duration, stiff=name in STIFF_METHODS)
+        h = default_step(system, y0, scene.time.duration, stiff=is_stiff(name))
     return name, float(h), reason or REASONS[name]
+
+
+def is_stiff(name: str) -> bool:
+    """Method ``name`` is stable far beyond the explicit step limit (the registry's ``stiff``):
+    its default step ignores the fast rates."""
+    # deferred: the registry imports the one-body kernels' modules (their records only here)
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    return INTEGRATORS[name].stiff
 
 
 def _sprung(scene) -> bool:
     """A spring or damper anywhere (between bodies or on a joint): the only stiff terms."""
     return bool(scene.springs) or any(j.stiffness or j.damping for j in scene.joints)
-
-
-STIFF_METHODS = ("implicit", "midpoint")
-"""The A-stable ones (the registry's ``stiff``): their default step ignores the fast rates."""
-
-STEPS_PER_RUN = 1000
-"""A fixed step the scene does not give: the duration / this, shortened for an explicit method
-to 0.1 / the fastest rate of the start's linearised motion (default_step says why)."""
 
 
 def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,

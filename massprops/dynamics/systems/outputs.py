@@ -56,8 +56,10 @@ def body_states(system, y: np.ndarray):
     return pos + system.origin, quat, vel, omega
 
 
-def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples:
-    """Samples of the states ``y`` (n, nq + nv) at times ``t``."""
+def evaluate(system, t: np.ndarray, y: np.ndarray,
+             energy: np.ndarray | None = None) -> Samples:
+    """Samples of the states ``y`` (n, nq + nv) at times ``t``; ``energy`` (n,) J their
+    energies where the caller has them (`System.energy`), else the samples carry none."""
     scene, tree = system.scene, system.tree
     n, nb, nj = len(t), len(tree.bodies), len(scene.joints)
     pos, quat = np.empty((n, nb, 3)), np.empty((n, nb, 4))
@@ -82,7 +84,6 @@ def evaluate(system, t: np.ndarray, y: np.ndarray, with_energy: bool) -> Samples
             turns = [0] if j.kind != "universal" else [0, 1]
             for col in turns:
                 coords[k][:, col] = np.unwrap(coords[k][:, col])
-    energy = np.array([system.energy(row) for row in y]) if with_energy else None
     pos += system.origin  # back from the assembly's middle (assemble.localized)
     points += system.origin
     return Samples(t, pos, quat, vel, omega, coords, rates, force, torque, energy, points)

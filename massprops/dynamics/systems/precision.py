@@ -21,10 +21,10 @@ from massprops.dynamics.precision import (
     PrecisionRun,
 )
 from massprops.dynamics.systems.methods import (
-    STIFF_METHODS,
     SYSTEM_INTEGRATORS,
     choose,
     default_step,
+    is_stiff,
 )
 from massprops.dynamics.systems.model import SystemScene
 from massprops.dynamics.systems.outputs import distance
@@ -45,13 +45,14 @@ stops at this many steps (the run bound): a method that cannot follow the system
 duration fails that rung and its ladder ends, instead of running for hours."""
 
 
-def ladder(scene: SystemScene, name: str) -> list[float]:
+def ladder(scene: SystemScene, name: str, start: tuple) -> list[float]:
     """Settings from coarse to fine for method ``name``: RTOL_LADDER for dop853; for a fixed
-    step, h0 / 2^k (k < STEP_HALVINGS), h0 = 16 × `methods.default_step`."""
+    step, h0 / 2^k (k < STEP_HALVINGS), h0 = 16 × `methods.default_step` at ``start``, the
+    (System, y0) of `run.prepare`."""
     if name == "dop853":
         return list(RTOL_LADDER)
-    system, y0, _ = prepare(scene)
-    h0 = 16.0 * default_step(system, y0, scene.time.duration, stiff=name in STIFF_METHODS)
+    system, y0 = start
+    h0 = 16.0 * default_step(system, y0, scene.time.duration, stiff=is_stiff(name))
     steps = [h0 / 2**k for k in range(STEP_HALVINGS)]
     return [h for h in steps if scene.time.duration / h <= MAX_LADDER_STEPS]
 
@@ -69,8 +70,9 @@ def precision_system(scene: SystemScene, integrators: Sequence[str] | None = Non
                              f"to a system; applicable: {', '.join(names)}")
         names = [n for n in names if n in integrators]
     every = scene.time.duration / SAMPLES
-    ref, reference = reference_run(scene, every, notice)
-    plan = [(n, s) for n in names for s in ladder(scene, n)]
+    system, y0, _ = prepare(scene)
+    ref, reference = reference_run(scene, every, (system, y0), notice)
+    plan = [(n, s) for n in names for s in ladder(scene, n, (system, y0))]
     runs: list[PrecisionRun] = []
     done: set[str] = set()
     for k, (name, setting) in enumerate(plan):
@@ -96,16 +98,16 @@ def precision_system(scene: SystemScene, integrators: Sequence[str] | None = Non
     return PrecisionReport(reference, tuple(runs))
 
 
-def reference_run(scene: SystemScene, every: float, notice=None):
+def reference_run(scene: SystemScene, every: float, start: tuple, notice=None):
     """(run, description) of the truth the ladders are measured against, as for one body
     (`dynamics.precision.reference_run`): dop853 at REFERENCE_RTOL, its accuracy its distance
     to a run at CHECK_RTOL; for a stiff system (where `auto` takes implicit) Radau IIA at a
     quarter of its ladder's finest step, checked against 2 and 4 times that step by
-    Richardson's rule (dop853 would need the stiff rate's steps)."""
-    system, y0, _ = prepare(scene)
+    Richardson's rule (dop853 would need the stiff rate's steps). ``start``: (System, y0)."""
+    system, y0 = start
     stiff = choose(system, y0, "auto", None, None)[0] == "implicit"
     method = "implicit" if stiff else "dop853"
-    fine = ladder(scene, "implicit")[-1] / 4 if stiff else REFERENCE_RTOL
+    fine = ladder(scene, "implicit", start)[-1] / 4 if stiff else REFERENCE_RTOL
     settings = (fine, 2 * fine, 4 * fine) if stiff else (fine, CHECK_RTOL)
     try:
         runs = [simulate_system(scene, integrator=method, rtol=x, step=x, every=every,

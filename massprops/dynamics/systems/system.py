@@ -233,9 +233,14 @@ class System:
 
     def conservative(self) -> bool:
         """Energy is conserved: no body forces or torques, no dampers or drives."""
-        if self.scene.forces or any(s.damping for s in self.scene.springs):
+        if not self.cannot_gain_energy() or any(s.damping for s in self.scene.springs):
             return False
-        return not any(j.damping or j.drive for j in self.scene.joints)
+        return not any(j.damping for j in self.scene.joints)
+
+    def cannot_gain_energy(self) -> bool:
+        """No term does work on the system from outside: no body forces or torques, no drives
+        (gravity, springs and dampers only)."""
+        return not (self.scene.forces or any(j.drive for j in self.scene.joints))
 
 
 def _local(bodies, body: int, point: np.ndarray) -> np.ndarray:
