@@ -69,7 +69,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
     # windows are judged at its middle: a stage on the end t1 must not see the next one's loads
     tw = 0.5 * (t0 + t1)
     pp, wp = by_ref(prog), by_ref(ws)  # the right-hand side's arguments (`systems_step.rhs_ref`)
-    status = rhs_ref(pp, wp, tw, y, k[0], rank0, fstats)
+    status = rhs_ref(pp, wp, tw, y, k[0], rank0)
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, t0, y)
@@ -89,7 +89,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
     h = min(h, hmax)
     for i in range(n):
         ytmp[i] = y[i] + h * k[0, i]
-    status = rhs_ref(pp, wp, tw, ytmp, k[1], rank0, fstats)
+    status = rhs_ref(pp, wp, tw, ytmp, k[1], rank0)
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, t0 + h, ytmp)
@@ -117,7 +117,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
         for s in range(1, 12):
             _stage(y, h, k, s, ytmp)
             t_last = t + h * C[s]
-            status = rhs_ref(pp, wp, tw, ytmp, k[s], rank0, fstats)
+            status = rhs_ref(pp, wp, tw, ytmp, k[s], rank0)
             if status != OK:
                 istats[1] += s
                 fail(istats, fstats, yfail, status, t_last, ytmp)
@@ -150,7 +150,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
                 for s in range(13, 16):
                     _stage(y, h, k, s, ytmp)
                     t_last = t + h * C[s]
-                    status = rhs_ref(pp, wp, tw, ytmp, k[s], rank0, fstats)
+                    status = rhs_ref(pp, wp, tw, ytmp, k[s], rank0)
                     if status != OK:
                         fail(istats, fstats, yfail, status, t_last, ytmp)
                         return

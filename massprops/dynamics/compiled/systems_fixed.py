@@ -94,7 +94,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
     # (Radau's last stage there made the slider-crank's drive end O(h) wrong: order 1)
     tw = 0.5 * (t0 + t1)
     pp, wp = by_ref(prog), by_ref(ws)  # the right-hand side's arguments (`systems_step.rhs_ref`)
-    status = rhs_ref(pp, wp, tw, y, fa, rank0, fstats)
+    status = rhs_ref(pp, wp, tw, y, fa, rank0)
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, t0, y)
@@ -150,13 +150,13 @@ def _step(prog, ws, pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
     n = y.size
     h = tb - ta
     if method == RK4:
-        status = _rk4(pp, wp, tw, h, y, fa, k, ytmp, ynew, rank0, fstats)
+        status = _rk4(pp, wp, tw, h, y, fa, k, ytmp, ynew, rank0)
         istats[1] += 3
     else:
-        status = _jacobian(pp, wp, tw, y, fa, scales, jac, ytmp, ftmp, rank0, fstats)
+        status = _jacobian(pp, wp, tw, y, fa, scales, jac, ytmp, ftmp, rank0)
         istats[1] += n
         if status == OK:
-            status, evals = _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0, fstats)
+            status, evals = _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0)
             istats[1] += evals
     if status == NEWTON_FAILED:
         return status
@@ -187,7 +187,7 @@ def _step(prog, ws, pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
 
 
 @array_inner
-def _rk4(pp, wp, tw, h, y, f0, k, ytmp, out, rank0, fstats):
+def _rk4(pp, wp, tw, h, y, f0, k, ytmp, out, rank0):
     """out = the classical RK4 step of length h from y, f0 = ẏ there; k[1:4] its other stages
     (loads judged at ``tw``)."""
     n = y.size
@@ -195,7 +195,7 @@ def _rk4(pp, wp, tw, h, y, f0, k, ytmp, out, rank0, fstats):
         c = 0.5 if s < 3 else 1.0
         for i in range(n):
             ytmp[i] = y[i] + c * h * (k[s - 1, i] if s > 1 else f0[i])
-        status = rhs_ref(pp, wp, tw, ytmp, k[s], rank0, fstats)
+        status = rhs_ref(pp, wp, tw, ytmp, k[s], rank0)
         if status != OK:
             for i in range(n):
                 out[i] = ytmp[i]
@@ -206,7 +206,7 @@ def _rk4(pp, wp, tw, h, y, f0, k, ytmp, out, rank0, fstats):
 
 
 @array_inner
-def _jacobian(pp, wp, tw, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
+def _jacobian(pp, wp, tw, y, f0, scales, jac, ytmp, ftmp, rank0):
     """jac (n, n) = ∂ẏ/∂y at y (loads at ``tw``) by forward differences (f0 = ẏ there). The
     increment of component j is √EPS × its error scale (floor and running max, ≥ |y_j|),
     rounded so that y_j + δ − y_j is exactly δ: Hairer's √(EPS max(1e-5, |y_j|)) is 5e-11 for
@@ -219,7 +219,7 @@ def _jacobian(pp, wp, tw, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
         yj = y[j]
         ytmp[j] = yj + math.sqrt(EPS) * max(scales[j], abs(yj))
         d = ytmp[j] - yj
-        status = rhs_ref(pp, wp, tw, ytmp, ftmp, rank0, fstats)
+        status = rhs_ref(pp, wp, tw, ytmp, ftmp, rank0)
         ytmp[j] = yj
         if status != OK:
             return status
@@ -229,7 +229,7 @@ def _jacobian(pp, wp, tw, y, f0, scales, jac, ytmp, ftmp, rank0, fstats):
 
 
 @array_inner
-def _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0, fstats):
+def _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0):
     """ynew by simplified Newton on the stage equations: Radau IIA, Z (3, n) with
     Z − h (A ⊗ I) F(y + Z) = 0, ynew = y + Z_3; the midpoint rule, w = y1 − y with
     w − h f(t + h/2, y + w/2) = 0 (in z[0]). (status, evaluations)."""
@@ -255,7 +255,7 @@ def _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0, fstats):
         for s in range(st):  # the stage derivatives F(y + Z_s), in k[1:]
             for i in range(n):
                 ytmp[i] = y[i] + (z[s, i] if method == RADAU else 0.5 * z[0, i])
-            status = rhs_ref(pp, wp, tw, ytmp, k[1 + s], rank0, fstats)
+            status = rhs_ref(pp, wp, tw, ytmp, k[1 + s], rank0)
             evals += 1
             if status == LINALG:  # an iterate gone wild: not the system's fault
                 return NEWTON_FAILED, evals

@@ -8,6 +8,9 @@ dispatch than the arithmetic.
   (σ_j = |w_j|): backward stable and accurate to round-off in every singular value, as LAPACK's
   (a column at round-off level of ‖X‖_F, a repeated constraint's, is not rotated further: its
   direction is noise and it would never pass the orthogonality test);
+- `pivoted_qr`, `apply_q`: Householder QR with column pivoting (LAPACK's dgeqp3, unblocked), the
+  rank-revealing factorisation each right-hand side uses: a few reflections where the SVD needs
+  sweeps (the SVD stays for the singular-pose test at accepted states, `systems_step.accept`);
 - `det`: a determinant by LU with partial pivoting.
 """
 
@@ -108,6 +111,71 @@ def jacobi_svd(x, p, k, v, sv):
         for r in range(p):
             s += x[r, j] * x[r, j]
         sv[j] = math.sqrt(s)
+
+
+@array_inner
+def pivoted_qr(x, rows, cols, order, tau, rtol):
+    """x[:rows, :cols] P = Q R in place: R on and above the diagonal, reflector k's vector below
+    it (its leading 1 implied), tau[k] its factor (H_k = I − tau_k v_k v_kᵀ, Q = H_0 H_1 ...);
+    order[1 + j] = the original index of column j. The factorisation stops at the first
+    |R_kk| ≤ rtol |R_00| (the rank, returned and kept in order[0]; a NaN column stops it too).
+
+    The pivot is the remaining column of largest norm below row k, recomputed at every k rather
+    than downdated: the matrices are few-by-few, and downdated norms cancel (LAPACK guards its
+    downdating with a recomputation for that reason)."""
+    for j in range(cols):
+        order[1 + j] = j
+    top = 0.0
+    rank = min(rows, cols)
+    for k in range(min(rows, cols)):
+        best, p = -1.0, k
+        for j in range(k, cols):
+            s = 0.0
+            for r in range(k, rows):
+                s += x[r, j] * x[r, j]
+            if s > best:
+                best, p = s, j
+        if p != k:
+            order[1 + k], order[1 + p] = order[1 + p], order[1 + k]
+            for r in range(rows):
+                x[r, k], x[r, p] = x[r, p], x[r, k]
+        alpha = math.sqrt(best)
+        if k == 0:
+            top = alpha
+        if not alpha > rtol * top:
+            rank = k
+            break
+        x0 = x[k, k]
+        beta = -math.copysign(alpha, x0)  # the sign that adds, never cancels
+        v0 = x0 - beta
+        tau[k] = (beta - x0) / beta
+        for r in range(k + 1, rows):
+            x[r, k] /= v0
+        x[k, k] = beta
+        for j in range(k + 1, cols):
+            s = x[k, j]
+            for r in range(k + 1, rows):
+                s += x[r, k] * x[r, j]
+            s *= tau[k]
+            x[k, j] -= s
+            for r in range(k + 1, rows):
+                x[r, j] -= s * x[r, k]
+    order[0] = rank
+    return rank
+
+
+@inlined
+def apply_q(x, tau, rank, rows, w, transpose):
+    """w[:rows] = Q w (transpose: Qᵀ w), Q the first ``rank`` reflections of `pivoted_qr`."""
+    for n in range(rank):
+        k = n if transpose else rank - 1 - n
+        s = w[k]
+        for r in range(k + 1, rows):
+            s += x[r, k] * w[r]
+        s *= tau[k]
+        w[k] -= s
+        for r in range(k + 1, rows):
+            w[r] -= s * x[r, k]
 
 
 @array_inner

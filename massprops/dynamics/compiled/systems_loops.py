@@ -1,7 +1,11 @@
 """A system program's cut joints and its equations of motion, compiled: the constraint rows Φ,
-G, Φ̈ at u̇ = 0 (`dynamics.systems.loops` documents the four primitives), the augmented solve and
+G, Φ̈ at u̇ = 0 (`dynamics.systems.loops` documents the four primitives), the constrained solve and
 the least-kinetic-energy corrections of the projection (`dynamics.systems.system` documents the
-maths: B = G L⁻ᵀ = U Σ Vᵀ, λ = U Σ⁻² Uᵀ r over the singular values kept, δ = L⁻ᵀ B⁺ residual).
+maths with B = G L⁻ᵀ = U Σ Vᵀ: δ = L⁻ᵀ B⁺ residual). Here B⁺ comes from a pivoted QR of Bᵀ over
+its independent rows (`factor`), a few reflections per evaluation where the SVD took sweeps;
+for a consistent residual (redundant rows are combinations of the kept ones) it is the same
+least-norm solution. The SVD is made only at accepted states, for the singular-pose test
+(`decompose`).
 
 Status codes returned: OK, LINALG (M not positive definite), SINGULAR (G's rank fell below the
 start's at an evaluated state).
@@ -11,9 +15,11 @@ from __future__ import annotations
 
 from massprops.dynamics.compiled.jit import array_inner, inlined
 from massprops.dynamics.compiled.systems_linalg import (
+    apply_q,
     cholesky,
     jacobi_svd,
     lower_solve,
+    pivoted_qr,
     upper_solve,
 )
 from massprops.dynamics.compiled.systems_loads import applied
@@ -160,11 +166,11 @@ def _rho(out, row, x, e, sign):
 
 @array_inner
 def factor(pp, wp):
-    """After `kinematics`: M, its Cholesky factor L, the constraint terms, B = G L⁻ᵀ and its
-    SVD (ws: U (m, kk), σ (kk,), V (nv, kk), kk = min(m, nv)); False if M is not positive
-    definite. The count of singular values kept is returned in ws[30][0]."""
+    """After `kinematics`: M, its Cholesky factor L, the constraint terms, B = G L⁻ᵀ (ws[26])
+    and the pivoted QR of Bᵀ (`systems_linalg.pivoted_qr`: Bᵀ P = Q R in ws[27], the order and
+    rank in ws[39], the reflectors' factors in ws[40]); False if M is not positive definite."""
     mass, low, g, bm, x = at(wp, 24), at(wp, 25), at(wp, 23), at(wp, 26), at(wp, 27)
-    vs, sv, uo, vo, row = at(wp, 28), at(wp, 29), at(wp, 31), at(wp, 32), at(wp, 33)
+    row = at(wp, 33)
     nv, m = mass.shape[0], g.shape[0]
     crba(pp, wp, mass)
     if not cholesky(mass, low, nv):
@@ -175,7 +181,18 @@ def factor(pp, wp):
             row[c] = g[i, c]
         lower_solve(low, row, nv)
         for c in range(nv):
-            bm[i, c] = row[c]
+            bm[i, c] = x[c, i] = row[c]
+    pivoted_qr(x, nv, m, at(wp, 39), at(wp, 40), at(pp, 20)[1])
+    return True
+
+
+@array_inner
+def decompose(pp, wp):
+    """The SVD of B (`factor` made it) for the singular-pose test (`systems_step.accept`): ws U
+    (m, kk), σ (kk,), V (nv, kk), kk = min(m, nv); ws[30] = [count kept, kept flags] (σ_j above
+    CONSTRAINT_RANK_RTOL of the largest)."""
+    bm, x, vs, sv, uo, vo = at(wp, 26), at(wp, 27), at(wp, 28), at(wp, 29), at(wp, 31), at(wp, 32)
+    nv, m = bm.shape[1], bm.shape[0]
     kk = min(m, nv)
     tall = nv <= m  # the one-sided Jacobi SVD wants rows >= columns: B or Bᵀ
     rows, cols = (m, nv) if tall else (nv, m)
@@ -199,79 +216,59 @@ def factor(pp, wp):
         keep[1 + j] = 1 if sv[j] > rank_rtol * top else 0
         kept += keep[1 + j]
     keep[0] = kept
-    return True
 
 
 @array_inner
-def min_norm(low, sv, uo, vo, keep, residual, out):
-    """out (nv,) = L⁻ᵀ B⁺ residual: the smallest correction in the kinetic-energy metric with
-    G out = residual (over the kept singular values; `factor` made low, sv, uo, vo, keep)."""
-    nv, m = low.shape[0], uo.shape[0]
+def min_norm(pp, wp, residual, out):
+    """out (nv,) = L⁻ᵀ z, z the least-norm solution of B_s z = residual_s over the independent
+    rows s of `factor`'s pivoted QR (Bᵀ_s = Q₁ R₁₁: z = Q₁ R₁₁⁻ᵀ residual_s): the smallest
+    correction in the kinetic-energy metric with G out = residual on those rows, and on the
+    others too where the residual is consistent (the redundant rows are their combinations)."""
+    low, x, order, tau = at(wp, 25), at(wp, 27), at(wp, 39), at(wp, 40)
+    nv = low.shape[0]
     for i in range(nv):
         out[i] = 0.0
-    for j in range(min(m, nv)):
-        if not keep[1 + j]:
-            continue
-        x = 0.0
-        for i in range(m):
-            x += uo[i, j] * residual[i]
-        x /= sv[j]
-        for i in range(nv):
-            out[i] += vo[i, j] * x
+    _solve_rt(x, order, residual, out, 1.0)
+    apply_q(x, tau, order[0], nv, out, False)
     upper_solve(low, out, nv)
 
 
+@inlined
+def _solve_rt(x, order, c, w, sign):
+    """w[:r] = R₁₁⁻ᵀ (sign · c over the pivot order), r = the rank (forward substitution)."""
+    for k in range(order[0]):
+        s = sign * c[order[1 + k]]
+        for i in range(k):
+            s -= x[i, k] * w[i]
+        w[k] = s / x[k, k]
+
+
 @array_inner
-def accelerations(pp, wp, t, q, u, udot, rank0, fstats):
-    """udot = the accelerations at (t, q, u) (λ in ws[34]); SINGULAR when the rank of G fell
-    below ``rank0`` (≥ 0), fstats[2] the smallest σ_min/σ_max kept."""
+def accelerations(pp, wp, t, q, u, udot, rank0):
+    """udot = the accelerations at (t, q, u); SINGULAR when the rank of G fell below ``rank0``
+    (≥ 0). Gauss' principle in z = Lᵀ u̇: z₀ = L⁻¹ (τ − h), the constraint B z = −Φ̈(u̇ = 0)
+    on the independent rows, z = Q [R₁₁⁻ᵀ c_s; (Qᵀ z₀) below the rank] (the least change of z₀,
+    i.e. of kinetic energy), u̇ = L⁻ᵀ z. The multipliers are not formed here: the reactions
+    are an output's work (`System.reactions`, their minimum-norm choice)."""
     kinematics(pp, q, u, wp)
     applied(pp, t, q, u, wp)
     g = at(wp, 23)
-    m = g.shape[0]
-    if m == 0:
+    if g.shape[0] == 0:
         return OK if aba(pp, wp, udot) else LINALG
-    h, tau, low, gdot, sv = at(wp, 35), at(wp, 12), at(wp, 25), at(wp, 20), at(wp, 29)
-    uo, keep, lam, rr = at(wp, 31), at(wp, 30), at(wp, 34), at(wp, 36)
+    h, tau, low, gdot = at(wp, 35), at(wp, 12), at(wp, 25), at(wp, 20)
+    x, order, rt = at(wp, 27), at(wp, 39), at(wp, 40)
     nv = h.shape[0]
     bias(pp, wp, h)
     if not factor(pp, wp):
         return LINALG
     for i in range(nv):
         udot[i] = tau[i] - h[i]
-        h[i] = udot[i]  # h now holds τ − h, M⁻¹ of it into udot
     lower_solve(low, udot, nv)
+    rank = order[0]
+    apply_q(x, rt, rank, nv, udot, True)
+    _solve_rt(x, order, gdot, udot, -1.0)
+    apply_q(x, rt, rank, nv, udot, False)
     upper_solve(low, udot, nv)
-    rank = keep[0]
-    kk = min(m, nv)
-    if rank:
-        top, least = 0.0, 1e300
-        for j in range(kk):
-            top = max(top, sv[j])
-            if keep[1 + j]:
-                least = min(least, sv[j])
-        fstats[2] = min(fstats[2], least / top)
-    for i in range(m):
-        x = -gdot[i]
-        for c in range(nv):
-            x -= g[i, c] * udot[c]
-        rr[i] = x
-        lam[i] = 0.0
-    for j in range(kk):
-        if keep[1 + j]:
-            x = 0.0
-            for i in range(m):
-                x += uo[i, j] * rr[i]
-            x /= sv[j] * sv[j]
-            for i in range(m):
-                lam[i] += uo[i, j] * x
-    for c in range(nv):
-        x = h[c]
-        for i in range(m):
-            x += g[i, c] * lam[i]
-        udot[c] = x
     if rank0 >= 0 and rank < rank0:
         return SINGULAR
-    lower_solve(low, udot, nv)
-    upper_solve(low, udot, nv)
     return OK

@@ -12,7 +12,14 @@ import numpy as np
 
 from massprops.dynamics.compiled.jit import array_inner, array_jit, inlined
 from massprops.dynamics.compiled.systems_linalg import det
-from massprops.dynamics.compiled.systems_loops import LINALG, OK, accelerations, factor, min_norm
+from massprops.dynamics.compiled.systems_loops import (
+    LINALG,
+    OK,
+    accelerations,
+    decompose,
+    factor,
+    min_norm,
+)
 from massprops.dynamics.compiled.systems_tree import FREE, SPHERICAL, kinematics
 from massprops.dynamics.compiled.unowned import at, by_ref
 
@@ -39,24 +46,25 @@ def workspace(prog):
             np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((m, nv)), np.zeros((p, p)),  # 24-27
             np.zeros((p, p)), np.zeros(p), np.zeros(1 + p, dtype=np.int64),  # 28-30
             np.zeros((m, kk)), np.zeros((nv, kk)), np.zeros(nv), np.zeros(m),  # 31-34
-            np.zeros(nv), np.zeros(m), np.zeros(max(nq, nv)), np.zeros(nq + nv))  # 35-38
+            np.zeros(nv), np.zeros(m), np.zeros(max(nq, nv)), np.zeros(nq + nv),  # 35-38
+            np.zeros(1 + p, dtype=np.int64), np.zeros(p))  # 39-40
 
 
 @array_jit
-def rhs(prog, ws, t, y, out, rank0, fstats):
+def rhs(prog, ws, t, y, out, rank0):
     """out = ẏ at (t, y); the status of `systems_loops.accelerations`."""
-    return rhs_ref(by_ref(prog), by_ref(ws), t, y, out, rank0, fstats)
+    return rhs_ref(by_ref(prog), by_ref(ws), t, y, out, rank0)
 
 
 @array_inner
-def rhs_ref(pp, wp, t, y, out, rank0, fstats):
+def rhs_ref(pp, wp, t, y, out, rank0):
     """`rhs` with the program and workspace by reference (`unowned.by_ref`, made once by a step
     loop: passing the two tuples themselves costs ~0.5 µs a call, a quarter of a small system's
     right-hand side)."""
     ji = at(pp, 1)
     nq = at(pp, 0)[0]
     q, u = y[:nq], y[nq:]
-    status = accelerations(pp, wp, t, q, u, out[nq:], rank0, fstats)
+    status = accelerations(pp, wp, t, q, u, out[nq:], rank0)
     for k in range(ji.shape[0]):
         kind, iq, iu, nqj = ji[k, 0], ji[k, 3], ji[k, 4], ji[k, 5]
         if kind == SPHERICAL:
@@ -142,7 +150,6 @@ def project(prog, ws, y, iterations, moved):
     normalize(prog, q)
     atol = prog[20][2]
     phi, g, delta, row = ws[19], ws[23], ws[37], ws[36]
-    low, sv, uo, vo, keep = ws[25], ws[29], ws[31], ws[32], ws[30]
     nv = u.shape[0]
     done = 0
     pp, wp = by_ref(prog), by_ref(ws)
@@ -158,7 +165,7 @@ def project(prog, ws, y, iterations, moved):
                 moved[2] = residual
                 return UNCLOSED
             break
-        min_norm(low, sv, uo, vo, keep, phi, delta)
+        min_norm(pp, wp, phi, delta)
         worst = 0.0
         for i in range(nv):
             delta[i] = -delta[i]
@@ -171,7 +178,7 @@ def project(prog, ws, y, iterations, moved):
         for c in range(nv):
             x += g[i, c] * u[c]
         row[i] = x
-    min_norm(low, sv, uo, vo, keep, row, delta)
+    min_norm(pp, wp, row, delta)
     worst = 0.0
     for i in range(nv):
         u[i] -= delta[i]
@@ -191,13 +198,16 @@ def _largest(v):
 @array_inner
 def accept(prog, ws, acc_b, acc_u, istats, fstats, t):
     """After the right-hand side at an accepted state (time t): CROSSED when a kept singular
-    value of B = G L⁻ᵀ changed sign since the last accepted step (det(U_prevᵀ B B_prevᵀ U_prev)
-    ≤ 0) or is below prog[20][3] (NEAR_SINGULAR_MARGIN) of the largest (fstats[6] the smallest
-    such ratio), else OK; the step's B and kept U become the last accepted (istats[5] their
-    rank)."""
+    value of B = G L⁻ᵀ (`systems_loops.decompose`) changed sign since the last accepted step
+    (det(U_prevᵀ B B_prevᵀ U_prev) ≤ 0) or is below prog[20][3] (NEAR_SINGULAR_MARGIN) of the
+    largest (fstats[6] the smallest such ratio, fstats[2] the run's), else OK; the step's B and
+    kept U become the last accepted (istats[5] their rank)."""
     bm, uo, keep, x, sv = ws[26], ws[31], ws[30], ws[27], ws[29]
     m, nv = bm.shape[0], bm.shape[1]
-    if m == 0 or keep[0] == 0:
+    if m == 0:
+        return OK
+    decompose(by_ref(prog), by_ref(ws))
+    if keep[0] == 0:
         return OK
     r = istats[5]
     status = OK
@@ -208,6 +218,7 @@ def accept(prog, ws, acc_b, acc_u, istats, fstats, t):
             least = min(least, sv[j])
     if least < fstats[6] * top:
         fstats[6] = least / top
+    fstats[2] = min(fstats[2], fstats[6])
     if least < prog[20][3] * top:
         status = CROSSED
     if r >= 0:
@@ -263,7 +274,7 @@ def settle(prog, ws, pp, wp, y, f, t_start, t, tw, moved, istats, fstats, acc_b,
     normalize(prog, y[:prog[0][0]])
     fstats[0] = max(fstats[0], moved[0])
     fstats[1] = max(fstats[1], moved[1])
-    status = rhs_ref(pp, wp, tw, y, f, istats[6], fstats)
+    status = rhs_ref(pp, wp, tw, y, f, istats[6])
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, t, y)
