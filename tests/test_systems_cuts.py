@@ -85,3 +85,46 @@ def test_cylindrical_cut_joint_on_a_ball_joint_moves_as_a_hinge():
     assert np.max(np.abs(coords[:, 1])) < 1e-12
     total = both.samples.torque[:, 0] + both.samples.torque[:, 1]
     assert np.max(np.abs(total - hinge.samples.torque[:, 0])) < 1e-7
+
+
+def _split_coupler(text: str, weld: str) -> str:
+    """The four-bar sample with its coupler cut in two equal halves welded back together by
+    ``weld`` (a fixed joint, written without a point): the same mechanism, one body more, and a
+    loop that now runs through a weld."""
+    import yaml
+
+    data = yaml.safe_load(text)
+    coupler = data["bodies"].pop("coupler")
+    b = np.array(next(j["point"] for j in data["joints"] if j["name"] == "B"))
+    c = np.array(next(j["point"] for j in data["joints"] if j["name"] == "C"))
+    half = 0.5 * coupler["mass"]
+    r = (c - b) / 4  # each half's centre from the coupler's
+    own = 0.5 * np.array(coupler["inertia"]) - half * (r @ r * np.eye(3) - np.outer(r, r))
+    for name, centre in (("coupler1", b + r), ("coupler2", c - r)):
+        data["bodies"][name] = {"mass": half, "inertia": own.tolist(),
+                                "position": centre.tolist()}
+    for joint in data["joints"]:
+        joint["bodies"] = [{"coupler": "coupler1" if joint["name"] == "B" else "coupler2"}
+                           .get(x, x) for x in joint["bodies"]]
+    data["joints"].append(yaml.safe_load(weld))
+    data["time"] = {"duration": 1.0}
+    return yaml.safe_dump(data)
+
+
+def test_a_weld_without_a_point_inside_a_loop_is_the_body_it_welds():
+    """A fixed joint may omit its point (any point serves a weld). Inside a loop, whichever
+    joint the tree cuts, the welded halves must move as the one coupler they make (a cut weld
+    without a point once failed with a TypeError)."""
+    import yaml
+
+    text = (SAMPLES / "four_bar.yaml").read_text()
+    data = yaml.safe_load(text)
+    data["time"] = {"duration": 1.0}
+    one = _run(yaml.safe_dump(data))
+    for weld in ("{name: W, type: fixed, bodies: [coupler1, coupler2]}",
+                 "{name: W, type: fixed, bodies: [coupler2, coupler1]}"):
+        two = _run(_split_coupler(text, weld))
+        assert two.diagnostics["degrees_of_freedom"] == 1
+        for k in range(3):  # the joints A, B, C of both runs (the scene's order)
+            assert np.max(np.abs(two.samples.coordinates[k] - one.samples.coordinates[k])) \
+                < 1e-8

@@ -170,7 +170,7 @@ def build_tree(scene: SystemScene) -> Tree:
         iq, iu = iq + NQ["free"], iu + NV["free"]
     for k, parent, child, rev in in_tree:
         j = scene.joints[k]
-        point = j.point if j.point is not None else bodies[j.b].com0
+        point = j.point
         axes = np.asarray(j.axes, float)
         if rev and j.kind == "universal":
             axes = axes[::-1].copy()

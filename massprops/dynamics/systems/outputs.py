@@ -90,12 +90,10 @@ def evaluate(system, t: np.ndarray, y: np.ndarray,
 
 
 def _joint_point(scene, k: int) -> np.ndarray:
-    """A joint's point on its second body, world at t = 0 (a fixed joint without one: the
-    second body's centre of mass; a distance joint: its second point)."""
+    """A joint's point on its second body, world at t = 0 (a distance joint: its second
+    point)."""
     j = scene.joints[k]
-    if j.kind == "distance":
-        return j.points[1]
-    return j.point if j.point is not None else scene.bodies[j.b].com0
+    return j.points[1] if j.kind == "distance" else j.point
 
 
 def _ncoord(kind: str) -> int:

@@ -113,9 +113,20 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
         else:
             body = spec
         bodies.append(_placed(name, body, placement))
+    joints = tuple(_fixed_point(j, bodies) for j in joints)
     return SystemScene(tuple(bodies), joints, gravity, forces, springs, initial, time, output,
                        source=source, input_files=tuple(inputs), warnings=tuple(warnings),
                        places=places)
+
+
+def _fixed_point(joint: SystemJoint, bodies: list) -> SystemJoint:
+    """A fixed joint written without a point gets one (any point serves a weld): the second
+    body's centre of mass at t = 0, or the first's when the second is the world. Every later
+    step (tree, cut rows, reactions) then reads ``point`` like any joint's."""
+    if joint.kind != "fixed" or joint.point is not None:
+        return joint
+    body = bodies[joint.b if joint.b != WORLD else joint.a]
+    return dataclasses.replace(joint, point=np.array(body.com0, float))
 
 
 # --- bodies -------------------------------------------------------------------------------------
@@ -233,8 +244,6 @@ def _joints(field: Field | None, index: dict, places: dict) -> tuple[SystemJoint
                                          for k, n in enumerate(pts.node.value)])
             if np.linalg.norm(values["points"][1] - values["points"][0]) == 0:
                 raise pts.error("a distance joint's points must differ (use spherical)")
-        if kind == "fixed" and values["point"] is None:
-            values["point"] = None  # filled at assembly: the second body's centre of mass
         for key in ("damping", "stiffness"):
             if key in fields:
                 values[key] = read_non_negative(fields[key])
