@@ -278,3 +278,25 @@ def test_precision_on_a_stiff_system_ends():
     dop853 = [r for r in report["runs"] if r["integrator"] == "dop853"]
     assert len(dop853) == 1 and "run bound" in dop853[0]["reason"]
     assert any(r["integrator"] == "implicit" and r["error"] is not None for r in report["runs"])
+
+
+def test_precision_refuses_at_once_a_reference_beyond_its_bound(monkeypatch):
+    """A reference that would need more than MAX_REFERENCE_STEPS is refused at the pace of
+    its first 1/PILOT_SHARE of the duration, not after stepping into the bound (the fuzzer's
+    case: 2.5 minutes of stepping, then the same refusal); only the pilot runs."""
+    from massprops.dynamics.systems import precision
+
+    scene = parse_system(_rod(1.0, 1e-3, -0.5, "stiffness: 1.0e4", 5.0), source="rod.yaml",
+                         base_dir=SAMPLES)
+    monkeypatch.setattr(precision, "MAX_REFERENCE_STEPS", 2000)
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs["max_steps"])
+        return simulate_system(*args, **kwargs)
+
+    monkeypatch.setattr(precision, "simulate_system", counted)
+    with pytest.raises(ComputationError, match=r"rod\.yaml: the reference run \(dop853 at "
+                       r"rtol 1e-13\) needs more than 2000 steps \(the pace of its first 0\.1 s"):
+        precision.precision_system(scene)
+    assert calls == [2 * 2000 // precision.PILOT_SHARE]

@@ -9,6 +9,8 @@ AT_REFERENCE of the reference's accuracy, or took longer than MAX_RUN_S.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Callable, Sequence
 
 from massprops.dynamics.accuracy import global_estimate
@@ -38,6 +40,11 @@ REFERENCE_RTOL, CHECK_RTOL = 1e-13, 1e-12
 
 MAX_REFERENCE_STEPS = 2_000_000
 """The reference runs' bound: the truth may take longer than a rung."""
+
+PILOT_SHARE = 50
+"""The reference is first run over 1/PILOT_SHARE of the duration: a system whose reference
+would run into MAX_REFERENCE_STEPS at that pace (minutes of stepping, then a refusal) is refused
+at once (the pilot costs 1/PILOT_SHARE of the reference)."""
 
 MAX_LADDER_STEPS = 200_000
 """Fixed steps that would take more steps than this are left out of a ladder, and every rung
@@ -109,15 +116,30 @@ def reference_run(scene: SystemScene, every: float, start: tuple, notice=None):
     method = "implicit" if stiff else "dop853"
     fine = ladder(scene, "implicit", start)[-1] / 4 if stiff else REFERENCE_RTOL
     settings = (fine, 2 * fine, 4 * fine) if stiff else (fine, CHECK_RTOL)
+    refused = (f"{scene.source}: the reference run ({method} at "
+               f"{'step' if stiff else 'rtol'} {fine:g}) needs more than "
+               f"{MAX_REFERENCE_STEPS} steps: the system is too stiff over its duration to be "
+               "measured; shorten time.duration")
+    duration = scene.time.duration
+    pilot = dataclasses.replace(scene, time=dataclasses.replace(
+        scene.time, duration=duration / PILOT_SHARE))
+    try:
+        pace = PILOT_SHARE * simulate_system(
+            pilot, integrator=method, rtol=fine, step=fine, every=duration, estimate=False,
+            notice=notice, max_steps=2 * MAX_REFERENCE_STEPS // PILOT_SHARE).steps
+    except RunBudgetError:
+        pace = math.inf
+    except ComputationError:
+        pace = 0  # the run itself says what went wrong, in its own words, below
+    if pace > MAX_REFERENCE_STEPS:
+        raise ComputationError(refused.replace(
+            " steps:", f" steps (the pace of its first {duration / PILOT_SHARE:.3g} s):", 1))
     try:
         runs = [simulate_system(scene, integrator=method, rtol=x, step=x, every=every,
                                 estimate=False, notice=notice, max_steps=MAX_REFERENCE_STEPS)
                 for x in settings]
     except RunBudgetError as exc:
-        raise ComputationError(f"{scene.source}: the reference run ({method} at "
-                               f"{'step' if stiff else 'rtol'} {fine:g}) needs more than "
-                               f"{MAX_REFERENCE_STEPS} steps: the system is too stiff over its "
-                               "duration to be measured; shorten time.duration") from exc
+        raise ComputationError(refused) from exc
     size = scene.size
     if stiff:
         accuracy = global_estimate("fixed", 5, distance(runs[0].samples, runs[1].samples, size),
