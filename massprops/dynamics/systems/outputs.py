@@ -86,7 +86,14 @@ def evaluate(system, t: np.ndarray, y: np.ndarray,
                 coords[k][:, col] = np.unwrap(coords[k][:, col])
     pos += system.origin  # back from the assembly's middle (assemble.localized)
     points += system.origin
-    return Samples(t, pos, quat, vel, omega, coords, rates, force, torque, energy, points)
+    return _in_world(system, Samples(t, pos, quat, vel, omega, coords, rates, force, torque,
+                                     energy, points))
+
+
+def _in_world(system, samples: Samples) -> Samples:
+    """``samples`` of a run in the falling frame (`falling`) carried to the world's; others as
+    they are."""
+    return samples if system.falling is None else system.falling.to_world(samples, system.origin)
 
 
 def _joint_point(scene, k: int) -> np.ndarray:
@@ -181,7 +188,7 @@ def evaluate_states(system, t: np.ndarray, y: np.ndarray) -> Samples:
     for comparing runs."""
     pos, quat, vel, omega = body_states(system, y)
     none = np.zeros((len(t), 0, 3))
-    return Samples(t, pos, quat, vel, omega, [], [], none, none, None)
+    return _in_world(system, Samples(t, pos, quat, vel, omega, [], [], none, none, None))
 
 
 def distance(a: Samples, b: Samples, size: float, scales: Samples | None = None) -> float:

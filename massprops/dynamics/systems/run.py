@@ -15,6 +15,7 @@ from massprops import tolerances
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
+from massprops.dynamics.systems.falling import falling_frame
 from massprops.dynamics.systems.integrate import MAX_STEPS, integrate
 from massprops.dynamics.systems.methods import (
     REASONS,
@@ -114,6 +115,10 @@ def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
             notes.append(f"{scene.where('initial')}projected onto the joints: coordinates and "
                          f"rates moved by up to {moved:.3g}")
     sol = system.solve(0.0, y0, check=False)
+    frame = falling_frame(scene, tree, y0)
+    if frame is not None:  # held by nothing: run where it falls (falling.py says why)
+        system = System(scene, tree, origin, frame)
+        y0 = frame.start(y0, tree.nq)
     system.rank = sol.rank
     return system, y0, notes
 
@@ -223,6 +228,8 @@ def _holding(system: System, y: np.ndarray, notes: list[str]) -> list | None:
 
     if system.m:
         notes.append(f"{system.scene.source}: holding forces with closed loops: {LOOP_RULE}")
+    if system.falling is not None:  # holding is against the weight: the world frame's system
+        system = System(system.scene, system.tree, system.origin)
     return holding(system, system.scene.time.duration, y)
 
 
@@ -266,7 +273,8 @@ def _check_energy(system: System, t: np.ndarray, energy: np.ndarray, name: str) 
 def _energy_scale(system: System) -> float:
     """J: Σ m |g| × size and the springs' k × size², a floor for the relative energy drift."""
     size = system.tree.size
-    weight = float(np.sum(np.linalg.norm(system.weights, axis=1))) * size
+    weight = sum(b.mass for b in system.tree.bodies) * float(np.linalg.norm(
+        system.scene.gravity)) * size  # the scene's weight, also in the falling frame
     springs = sum(s.stiffness for s in system.scene.springs) * size * size
     return weight + springs + sum(j.stiffness for j in system.scene.joints)
 

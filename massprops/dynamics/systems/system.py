@@ -18,6 +18,7 @@ from massprops import tolerances
 from massprops.dynamics.systems import cutjoint
 from massprops.dynamics.systems import tree as tr
 from massprops.dynamics.systems.assemble import Tree
+from massprops.dynamics.systems.falling import Falling
 from massprops.dynamics.systems.loops import terms
 from massprops.dynamics.systems.model import WORLD, SystemScene
 from massprops.dynamics.systems.program import build_program
@@ -49,12 +50,16 @@ class System:
     ``scene`` and ``tree`` are about ``origin`` (3,) m world (`assemble.localized`): positions
     and points the outputs give add it back."""
 
-    def __init__(self, scene: SystemScene, tree: Tree, origin: np.ndarray | None = None) -> None:
+    def __init__(self, scene: SystemScene, tree: Tree, origin: np.ndarray | None = None,
+                 falling: Falling | None = None) -> None:
         self.scene, self.tree = scene, tree
         self.origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=float)
+        self.falling = falling  # the free-fall frame this system runs in (falling.py), or None
         self.nq, self.nv, self.m = tree.nq, tree.nv, sum(p.rows for p in tree.prims)
         bodies = tree.bodies
-        self.weights = np.array([b.mass * np.asarray(scene.gravity) for b in bodies])
+        # in the falling frame the fictitious force −m g cancels each weight
+        gravity = np.zeros(3) if falling is not None else np.asarray(scene.gravity, float)
+        self.weights = np.array([b.mass * gravity for b in bodies])
         self.force_local = [None if f.point is None else
                             bodies[f.body].rotation0.T @ (f.point - bodies[f.body].com0)
                             for f in scene.forces]
