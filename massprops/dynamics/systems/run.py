@@ -212,7 +212,8 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
                      "reactions reported are the minimum-norm choice, not unique")
     if estimate:
         diagnostics["error_estimate"] = error_estimate(system, y0, t_out, name, setting, floors,
-                                                       _windows(scene), samples, 2 * limit)
+                                                       _windows(scene), samples, 2 * limit,
+                                                       run.steps)
     held = _holding(system, run.y_out[-1], notes)
     return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics, scene,
                         tuple(notes), held, name, reason)
