@@ -300,3 +300,25 @@ def test_precision_refuses_at_once_a_reference_beyond_its_bound(monkeypatch):
                        r"rtol 1e-13\) needs more than 2000 steps \(the pace of its first 0\.1 s"):
         precision.precision_system(scene)
     assert calls == [2 * 2000 // precision.PILOT_SHARE]
+
+
+def test_a_rank_drop_at_a_wild_state_is_divergence(recwarn):
+    """The kernel reports a rank drop at a state gone wild (a slider 1e200 m out, fuzzer case):
+    the numpy solve that names the joints then fails on the mass matrix itself. That is the
+    run going wild, said in one line; it was an internal LinAlgError and numpy's overflow
+    warnings on stderr."""
+    from massprops.dynamics.compiled.systems_loops import SINGULAR
+    from massprops.dynamics.systems.integrate import _failure
+    from massprops.dynamics.systems.run import prepare
+
+    system, y0, _ = prepare(load_system(SAMPLES / "slider_crank.yaml"))
+    y = y0.copy()
+    for j in system.tree.joints:
+        if j.kind == "prismatic":
+            y[j.iq] = 1e200
+    fstats = np.array([0.0, 0.0, 1.0, 0.5, 0.0, 0.0, 1.0])
+    failure = _failure(system, SINGULAR, fstats, y, 1000, "dop853")
+    assert isinstance(failure, ArithmeticError)
+    assert "slider_crank.yaml: the dop853 run went wild (its mass matrix lost positive " \
+           "definiteness) at t = 0.5 s" in str(failure)
+    assert not recwarn.list

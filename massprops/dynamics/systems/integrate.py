@@ -164,9 +164,11 @@ def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: 
         return RunBudgetError(f"{source}: the run took {max_steps} steps by "
                               f"t = {t:.6g} s, the run bound ({setting_ref('max_steps')}); "
                               f"raise it or {fewer}")
-    if status == codes.LINALG:  # M is positive definite at any finite state of a valid scene
-        return ArithmeticError(wild.replace("diverged", "went wild (its mass matrix lost "
-                                            "positive definiteness)", 1))
+    # M is positive definite at any finite state of a valid scene
+    indefinite = ArithmeticError(wild.replace("diverged", "went wild (its mass matrix lost "
+                                              "positive definiteness)", 1))
+    if status == codes.LINALG:
+        return indefinite
     if status == codes.CROSSED:
         since = float(fstats[4])  # == t: an accepted state at the pose (NEAR_SINGULAR_MARGIN)
         return SingularPose(system.singular_message(t, np.zeros((system.m, 0)),
@@ -179,7 +181,10 @@ def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: 
                             f"{PROJECT_ITERATIONS} Newton steps): the loop cannot be "
                             "assembled there")
     try:  # the rank fell: the numpy solve at that state names the joints that lost it
-        system.solve(t, y)
+        with np.errstate(all="ignore"):  # a wild state's overflow is said below, not warned
+            system.solve(t, y)
     except SingularPose as exc:
         return exc
+    except np.linalg.LinAlgError:  # not even M is positive definite there
+        return indefinite
     return SingularPose(system.singular_message(t, np.zeros((system.m, 0))))
