@@ -322,3 +322,23 @@ def test_a_rank_drop_at_a_wild_state_is_divergence(recwarn):
     assert "slider_crank.yaml: the dop853 run went wild (its mass matrix lost positive " \
            "definiteness) at t = 0.5 s" in str(failure)
     assert not recwarn.list
+
+
+@pytest.mark.parametrize("scene, step", [("double_pendulum.yaml", "0.2"),
+                                         ("heavy_top.yaml", "0.05")])
+def test_a_run_that_does_not_follow_the_motion_says_so(run, scene, step):
+    """A fixed step far too long for the motion (a system and one body): the run is still
+    reported (exit 0, its JSON), with one warning that its error estimate, 0.1 or more of the
+    size, a radian or the speeds, makes its numbers no results, naming the option to change.
+    The fuzzers found such runs reported with estimates of 2.6 to 21 and no word."""
+    import json
+
+    result = run("simulate", SAMPLES / scene, "--integrator", "rk4", "--step", step, "--json")
+    assert result.exit_code == 0
+    estimate = json.loads(result.stdout)["diagnostics"]["error_estimate"]
+    assert estimate >= 0.1
+    warned = [line for line in result.stderr.splitlines() if "error estimate" in line]
+    assert warned == [f"massprops: warning: {SAMPLES / scene}: the rk4 run's error estimate is "
+                      f"{estimate:.2g} (a fraction of the size, of a radian, of the speeds): it "
+                      "did not follow the motion, its numbers are not to be trusted; shorten "
+                      "--step"]

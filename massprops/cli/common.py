@@ -53,6 +53,12 @@ def say_warning(name: str, message: str) -> None:
     click.echo(f"massprops: warning: {name}: {fitted(cli_text(message))}", err=True)
 
 
+def say_notes(notes) -> None:
+    """A run's notes (each already says its file), as warnings."""
+    for note in notes:
+        click.echo(f"massprops: warning: {fitted(cli_text(note))}", err=True)
+
+
 SCENE_COMMANDS = ("simulate", "precision")
 """Commands that read a scene file: an inspect option in a message becomes its scene key."""
 

@@ -9,7 +9,7 @@ from typing import Any
 import click
 
 from massprops.cli.app import cli
-from massprops.cli.common import emit_json, guarded, positive, say_note, say_warning
+from massprops.cli.common import emit_json, guarded, positive, say_note, say_notes, say_warning
 
 
 class RegistryChoice(click.ParamType):
@@ -120,8 +120,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             scene = _one_body_duration(scene, scene_path, duration)
         for w in scene.warnings:
             say_warning(scene.body_source, w)
-        for note in scene.notes:  # already placed: "scene.yaml:LINE: ..."
-            click.echo(f"massprops: warning: {note}", err=True)
+        say_notes(scene.notes)  # already placed: "scene.yaml:LINE: ..."
         out = output_path or scene.output.file
         sampling = every or scene.output.every
         if sampling is None and (out or plot_path):
@@ -140,6 +139,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         finally:
             progress.close()
         _save(result, out, plot_path, force, protect)
+        say_notes(result.notes)
         if as_json:
             emit_json(result.as_dict())
         else:
@@ -265,8 +265,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
         sampling = scene.time.duration / 1000
     result = simulate_system(scene, integrator=integrator, rtol=rtol, step=step, every=sampling,
                              notice=say_note, max_steps=max_steps)
-    for note in result.notes:
-        click.echo(f"massprops: warning: {note}", err=True)
+    say_notes(result.notes)
     if out:
         write_system_trajectory(result, out, force=force,
                                 protect=[scene_path, *scene.input_files])

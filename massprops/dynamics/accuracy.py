@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from massprops.errors import setting_ref
 from massprops.rotation import rotation_angle_between
 
 ADAPTIVE_TIGHTENING = 20.0
@@ -80,6 +81,24 @@ def _state_error(a, b, scales: Scales) -> float:
     ]
     worst = max(float(np.max(p)) for p in parts)
     return worst if np.isfinite(worst) else float("inf")
+
+
+UNRESOLVED_ESTIMATE = 0.1
+"""An error estimate at or above this (the contract's metric: a tenth of the size, of a radian,
+of the largest speed) says the run did not follow the motion: its numbers are not results, and
+a warning says so (the fuzzers found exit-0 runs whose estimates were 2.6 to 21)."""
+
+
+def estimate_note(source: str, estimate: float | None, method: str, kind: str) -> str | None:
+    """The warning for a run whose error ``estimate`` is UNRESOLVED_ESTIMATE or more (None
+    otherwise); ``kind``: the method's, which setting would help."""
+    if estimate is None or not estimate >= UNRESOLVED_ESTIMATE:
+        return None
+    fix = (f"tighten {setting_ref('rtol')}" if kind == "adaptive"
+           else f"shorten {setting_ref('step')}")
+    return (f"{source}: the {method} run's error estimate is {estimate:.2g} (a fraction of the "
+            f"size, of a radian, of the speeds): it did not follow the motion, its numbers are "
+            f"not to be trusted; {fix}")
 
 
 def companion_settings(kind: str, setting: float) -> tuple[float, ...]:

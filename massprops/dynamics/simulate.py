@@ -4,6 +4,7 @@ convert at the edges (frames.py), check for divergence, report diagnostics.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -13,6 +14,7 @@ import numpy as np
 from massprops.dynamics.accuracy import (
     Scales,
     companion_settings,
+    estimate_note,
     exact_roundoff,
     global_estimate,
     state_error,
@@ -219,6 +221,9 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
         others = None if side is None else _companion_runs(side, progress)
         diagnostics["error_estimate"] = _error_estimate(scene, program, spec, setting, traj,
                                                         others, run.short_err)
+        note = estimate_note(scene.source, diagnostics["error_estimate"], name, spec.kind)
+        if note is not None:
+            result = dataclasses.replace(result, notes=(*result.notes, note))
     return result
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from massprops import tolerances
+from massprops.dynamics.accuracy import estimate_note
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
@@ -214,6 +215,9 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
         diagnostics["error_estimate"] = error_estimate(system, y0, t_out, name, setting, floors,
                                                        _windows(scene), samples, 2 * limit,
                                                        run.steps)
+        note = estimate_note(scene.source, diagnostics["error_estimate"], name,
+                             "adaptive" if name == "dop853" else "fixed")
+        notes += [] if note is None else [note]
     held = _holding(system, run.y_out[-1], notes)
     return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics, scene,
                         tuple(notes), held, name, reason)
