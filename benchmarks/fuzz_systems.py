@@ -101,8 +101,10 @@ def judge(proc: subprocess.CompletedProcess, expect: str, scene: str = "") -> st
         return f"NOT ONE ERROR LINE (exit {code}, {len(errors)} lines)"
     if expect == "invalid":
         return "refused (1: invalid scene)" if code == 1 else f"EXIT {code} ON AN INVALID SCENE"
-    if expect == "usage":
-        return "refused (2: method)" if code == 2 else f"EXIT {code} FOR A REFUSED METHOD"
+    if expect == "usage":  # named on the command line: exit 2; in the scene: its line, exit 1
+        if code == 2 or (code == 1 and "time.integrator" in errors[0]):
+            return f"refused ({code}: method)"
+        return f"EXIT {code} FOR A REFUSED METHOD"
     if code == 1:
         return "review (1: valid scene refused)"
     unnamed = "" if scene in errors[0] else "; no file named"

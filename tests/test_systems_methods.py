@@ -117,6 +117,23 @@ def test_one_body_methods_refused(pendulum, name):
         simulate_system(scene, integrator=name)
 
 
+def test_a_one_body_method_in_a_system_scene_is_the_scene_s_mistake(tmp_path, run):
+    """time.integrator naming a one-body method in a system scene: exit 1 at its line (the
+    file is wrong); --integrator naming one: exit 2 (the command line is)."""
+    path = tmp_path / "dp.yaml"
+    path.write_text((SAMPLES / "double_pendulum.yaml").read_text().replace(
+        "time: {duration: 10.0}", "time: {duration: 10.0, integrator: splitting6}"))
+    in_scene = run("simulate", path)
+    assert in_scene.exit_code == 1
+    line = next(n for n, text in enumerate(path.read_text().splitlines(), 1)
+                if text.startswith("time:"))
+    assert in_scene.stderr.strip() == (
+        f"massprops: error: {path}:{line}: time.integrator: splitting6 steps one body's state "
+        "only; a system runs with auto, dop853, rk4, midpoint, implicit")
+    on_line = run("simulate", SAMPLES / "double_pendulum.yaml", "--integrator", "splitting6")
+    assert on_line.exit_code == 2 and "one body's state only" in on_line.stderr
+
+
 def test_cli_fixed_step(tmp_path, run):
     """--integrator rk4 --step on a system: the JSON names the method and its reason."""
     import json

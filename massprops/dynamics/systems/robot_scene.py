@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from massprops.dynamics.model import OutputSettings, TimeSettings
-from massprops.dynamics.scene import _output, _time
+from massprops.dynamics.scene import _output
 from massprops.dynamics.systems.description import (
     BASES,
     INERTIALS,
@@ -33,7 +33,13 @@ from massprops.dynamics.systems.description import (
     describe,
 )
 from massprops.dynamics.systems.model import SystemInitial, SystemScene
-from massprops.dynamics.systems.scene import _forces, _initial, parse_system, with_time
+from massprops.dynamics.systems.scene import (
+    _forces,
+    _initial,
+    parse_system,
+    system_time,
+    with_time,
+)
 from massprops.dynamics.yamlnodes import Field, compose, read_choice, read_mapping, read_string
 from massprops.errors import SceneError
 
@@ -85,10 +91,7 @@ def parse_model_scene(text: str, *, source: str, base_dir: Path) -> SystemScene:
     places: dict[str, str] = {}
     gravity, forces, springs = _forces(fields.get("forces"), index)
     initial = _initial(fields.get("initial"), index, {j.name for j in desc.joints}, places)
-    # deferred: the registry is read only once the scene's other keys are known to be good
-    from massprops.dynamics.integrators import integrator_names
-
-    time = _time(fields["time"], integrator_names())
+    time = system_time(fields["time"])
     output = _output(fields.get("output"), base_dir)
     return _scene(desc, gravity, forces, springs, initial, time, output, source, places)
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from massprops.dynamics.model import RigidBody
+from massprops.dynamics.model import RigidBody, TimeSettings
 from massprops.dynamics.scene import (
     _body_spec,
     _mesh_body,
@@ -99,10 +99,7 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
     joints = _joints(fields.get("joints"), index, places)
     gravity, forces, springs = _forces(fields.get("forces"), index)
     initial = _initial(fields.get("initial"), index, {j.name for j in joints}, places)
-    # deferred: the registry is read only once the scene's other keys are known to be good
-    from massprops.dynamics.integrators import integrator_names
-
-    time = _time(fields["time"], integrator_names())
+    time = system_time(fields["time"])
     output = _output(fields.get("output"), base_dir)
     bodies, inputs, warnings = [], [], []
     for name, (spec, placement) in zip(names, specs):
@@ -117,6 +114,22 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
     return SystemScene(tuple(bodies), joints, gravity, forces, springs, initial, time, output,
                        source=source, input_files=tuple(inputs), warnings=tuple(warnings),
                        places=places)
+
+
+def system_time(field: Field) -> TimeSettings:
+    """A system scene's ``time:`` (the one-body keys), its integrator one a system runs with:
+    a one-body method named there is this file's mistake, said at its line (exit 1), where
+    --integrator naming one is the command line's (exit 2, `run.simulate_system`)."""
+    # deferred: the registry is read only once the scene's other keys are known to be good
+    from massprops.dynamics.integrators import integrator_names
+    from massprops.dynamics.systems.methods import SYSTEM_INTEGRATORS
+
+    time = _time(field, integrator_names())
+    if time.integrator not in SYSTEM_INTEGRATORS:
+        named = read_mapping(field, ("duration", "integrator", "rtol", "step"))["integrator"]
+        raise named.error(f"{time.integrator} steps one body's state only; a system runs with "
+                          f"{', '.join(SYSTEM_INTEGRATORS)}")
+    return time
 
 
 def _fixed_point(joint: SystemJoint, bodies: list) -> SystemJoint:
