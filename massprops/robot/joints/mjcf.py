@@ -8,7 +8,8 @@ the compiler's angle unit for a hinge, limited when stated (``autolimits``, MuJo
 ``limited="true"``; ``damping``, ``stiffness`` about ``springref``. A body with no joint is welded
 to its parent. Several joints in one body compose in order (each later one turns with the
 earlier ones); two hinges through one point are a universal joint, a hinge and a slide along one
-axis a cylindrical joint (named ``a+b``); other combinations are refused. ``<equality><connect
+axis a cylindrical joint (named ``a+b``, when neither has damping or a spring); any other
+set is a chain of massless stages, one joint each (`_Reader._stages`). ``<equality><connect
 body1 body2 anchor>`` (anchor in body1's frame) is a loop: a spherical joint between the two
 bodies at the anchor. ``ref`` must be 0 (the zero pose is the pose as written).
 """
@@ -73,10 +74,11 @@ class _Reader:
         name = node.attrs.get("name") or f"body#{body_id}"
         world = compose(parent_world, compose(frame, _pose(node.attrs, node, self.compiler,
                                                            self.v)))
-        self.poses[name] = world
         own = [c for c in node.children if c.tag in ("joint", "freejoint")]
-        self.joints.append(self.joint(own, name, parent, childclass) if own else RobotJoint(
-            f"{name}.weld", "fixed", parent, name, IDENTITY, np.zeros((0, 3)), node))
+        # the stages of a split body go before it: a parent's pose precedes its children's
+        self.joints.extend(self.joint(own, name, parent, childclass, world) if own else [
+            RobotJoint(f"{name}.weld", "fixed", parent, name, IDENTITY, np.zeros((0, 3)), node)])
+        self.poses[name] = world
         self.walk(node, childclass, IDENTITY, name, world)
 
     def one(self, node: Node, childclass: str) -> tuple[str, dict]:
@@ -86,7 +88,10 @@ class _Reader:
             raise self.v.error(node, f"joint type {kind!r}: expected hinge, slide, ball or free")
         return kind, a
 
-    def joint(self, nodes: list[Node], body: str, parent: str, childclass: str) -> RobotJoint:
+    def joint(self, nodes: list[Node], body: str, parent: str, childclass: str,
+              world) -> list[RobotJoint]:
+        """The joints of one body: one joint, a universal or cylindrical pair, else a chain of
+        massless stages (see `_stages`)."""
         v = self.v
         read = [self.one(n, childclass) for n in nodes]
         names = [a.get("name") or f"{body}.joint{k}" for k, (_, a) in enumerate(read)]
@@ -106,40 +111,59 @@ class _Reader:
         limits = [self.limits(n, k, a) for n, (k, a) in zip(nodes, read)]
         damping = [float(a.get("damping", "0")) for _, a in read]
         stiff = [float(a.get("stiffness", "0")) for _, a in read]
-        rest = [float(a.get("springref", "0")) for _, a in read]
-        if kinds[0] == "hinge":
-            rest[0] = self.compiler.radians(rest[0])
+        rest = [self.compiler.radians(float(a.get("springref", "0"))) if k == "hinge"
+                else float(a.get("springref", "0")) for k, a in read]
         if len(nodes) == 1:
             kind = _KINDS[kinds[0]]
             if kind == "free":
                 self.floating.add(body)
             ax = axes[0][None, :] if kind in ("revolute", "prismatic") else np.zeros((0, 3))
-            return RobotJoint(names[0], kind, parent, body, (np.eye(3), pos[0]), ax, nodes[0],
-                              (limits[0],) if limits[0] else None, damping[0], stiff[0],
-                              rest[0])
+            return [RobotJoint(names[0], kind, parent, body, (np.eye(3), pos[0]), ax, nodes[0],
+                               (limits[0],) if limits[0] else None, damping[0], stiff[0],
+                               rest[0])]
         joined = "+".join(names)
-        if len(nodes) == 2 and kinds == ["hinge", "hinge"] and \
+        sprung = any(damping) or any(stiff)  # a pair joint carries no damping or spring
+        if not sprung and len(nodes) == 2 and kinds == ["hinge", "hinge"] and \
                 np.linalg.norm(pos[0] - pos[1]) <= _SAME_POINT and \
                 np.linalg.norm(np.cross(axes[0], axes[1])) > _PARALLEL:
-            kind, ax = "universal", np.array(axes)
-        elif len(nodes) == 2 and sorted(kinds) == ["hinge", "slide"] and \
+            return [RobotJoint(joined, "universal", parent, body, (np.eye(3), pos[0]),
+                               np.array(axes), nodes[0], tuple(limits) if any(limits) else None)]
+        if not sprung and len(nodes) == 2 and sorted(kinds) == ["hinge", "slide"] and \
                 np.linalg.norm(np.cross(axes[0], axes[1])) <= _PARALLEL and axes[0] @ axes[1] > 0:
             turn = kinds.index("hinge")
-            kind, ax = "cylindrical", axes[turn][None, :]
             order = [turn, 1 - turn]
-            pos = [pos[turn]]
-            limits = [limits[k] for k in order]
-        else:
+            return [RobotJoint(joined, "cylindrical", parent, body, (np.eye(3), pos[turn]),
+                               axes[turn][None, :], nodes[0],
+                               tuple(limits[k] for k in order) if any(limits) else None)]
+        if "free" in kinds:
             raise v.error(nodes[0], f"body {body!r} has joints {', '.join(names)} "
-                                    f"({', '.join(kinds)}): the systems engine takes one joint, "
-                                    "two hinges through one point (universal) or a hinge and a "
-                                    "slide along one axis (cylindrical); split the body with "
-                                    "massless bodies between the joints")
-        if any(damping) or any(stiff):
-            raise v.error(nodes[0], f"body {body!r}: damping or stiffness on a combined joint "
-                                    f"({joined}) is not supported; remove it or split the body")
-        return RobotJoint(joined, kind, parent, body, (np.eye(3), pos[0]), ax, nodes[0],
-                          tuple(limits) if any(limits) else None)
+                                    f"({', '.join(kinds)}): a free joint must be a body's only "
+                                    "joint (as MuJoCo requires); remove the others")
+        return self._stages(nodes, body, parent, world, names, kinds, pos, axes, limits,
+                            damping, stiff, rest)
+
+    def _stages(self, nodes, body, parent, world, names, kinds, pos, axes, limits, damping,
+                stiff, rest) -> list[RobotJoint]:
+        """A body's several joints as a chain, as MuJoCo composes them (each later joint moves
+        with the earlier ones): joint k carries a massless stage ``body.name_k`` that sits on the
+        body's frame at the zero pose, the last joint carries the body; each joint keeps its own
+        name, damping and spring (a planar root slide x, slide z, hinge y; three hinges)."""
+        out, upper = [], parent
+        for k, node in enumerate(nodes):
+            child = body if k == len(nodes) - 1 else f"{body}.{names[k]}"
+            if child != body:
+                if child in self.poses:
+                    raise self.v.error(node, f"a body is named {child!r}, the name massprops "
+                                             "gives a stage of a body with several joints; "
+                                             "rename it")
+                self.poses[child] = world
+            kind = _KINDS[kinds[k]]
+            ax = axes[k][None, :] if kind in ("revolute", "prismatic") else np.zeros((0, 3))
+            out.append(RobotJoint(names[k], kind, upper, child, (np.eye(3), pos[k]), ax, node,
+                                  (limits[k],) if limits[k] else None, damping[k], stiff[k],
+                                  rest[k]))
+            upper = child
+        return out
 
     def limits(self, node: Node, kind: str, a: dict):
         limited = a.get("limited", "auto")
