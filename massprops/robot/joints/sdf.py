@@ -10,7 +10,8 @@ top-level one in the world). Kinds: revolute, continuous (no limits), prismatic,
 universal (``axis`` fixed in the parent, ``axis2`` in the child); revolute2, screw and gearbox
 are refused. Limits of ±1e16 (SDF's "none") are no limits. A ``<static>true`` model's joints
 (its nested models' too) are all welds. A joint's <parent>/<child> may name a nested model's link
-as ``inner::link``; its child must be in the joint's own model.
+as ``inner::link``; its child must be in the joint's own model. A link may be the child of
+several joints (a closed chain): the joints that close loops are marked (`frames.mark_loops`).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from massprops.robot.joints.frames import (
     RobotJoint,
     compose,
     inverse,
+    mark_loops,
     unit_axis,
 )
 
@@ -71,8 +73,8 @@ def sdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
                 joint = RobotJoint(joint.name, "fixed", joint.parent, joint.child, joint.frame,
                                    np.zeros((0, 3)), joint.node)
             joints.append(joint)
-    return Mechanism(path, "sdf", tuple(joints), poses, frozenset(), None,
-                     tuple(sorted(notes)))
+    return Mechanism(path, "sdf", tuple(mark_loops(joints, list(poses))), poses, frozenset(),
+                     None, tuple(sorted(notes)))
 
 
 def _static(model: Node) -> bool:
