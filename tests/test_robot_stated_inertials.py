@@ -1,0 +1,61 @@
+"""What `simulate` does with a description's stated inertials that no body can have, and with an
+MJCF body whose mass MuJoCo takes from geoms massprops cannot read: one line naming the file,
+the link and the problem; a point mass (zero inertia, or round-off below zero) is accepted."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+ARM = ('<robot name="r"><link name="base"/>\n'
+       '<link name="arm"><inertial><origin xyz="0.3 0 0"/><mass value="{m}"/><inertia '
+       'ixx="{ixx}" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="{izz}"/></inertial></link>\n'
+       '<joint name="j" type="continuous"><parent link="base"/><child link="arm"/>'
+       '<axis xyz="0 1 0"/></joint>\n'
+       '<link name="tip"><inertial><mass value="0.5"/><inertia ixx="-5e-20" ixy="0" ixz="0" '
+       'iyy="-5e-20" iyz="0" izz="0"/></inertial></link>\n'
+       '<joint name="k" type="fixed"><parent link="arm"/><child link="tip"/>'
+       '<origin xyz="0.6 0 0"/></joint></robot>')
+
+
+@pytest.mark.parametrize("m, ixx, izz, needle", [
+    ("1", "-0.01", "0.01", "negative principal moment"),
+    ("-1", "0.01", "0.01", "negative or non-finite mass"),
+])
+def test_impossible_inertials_are_refused_in_one_line(tmp_path, run, m, ixx, izz, needle):
+    (tmp_path / "r.urdf").write_text(ARM.format(m=m, ixx=ixx, izz=izz))
+    result = run("simulate", tmp_path / "r.urdf", "--duration", "0")
+    assert result.exit_code == 1
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "r.urdf:2: link 'arm'" in lines[0] and needle in lines[0], \
+        result.stderr
+
+
+def test_triangle_breaking_inertia_is_said_and_point_masses_are_taken(tmp_path, run):
+    """izz 0.05 > ixx + iyy = 0.02: warned, simulated; the tip's -5e-20 is a point mass's
+    round-off (iCub writes such), no warning, no NaN."""
+    (tmp_path / "r.urdf").write_text(ARM.format(m="1", ixx="0.01", izz="0.05"))
+    result = run("simulate", tmp_path / "r.urdf", "--duration", "0")
+    assert result.exit_code == 0, result.stderr
+    said = [line for line in result.stderr.splitlines() if "breaks the triangle" in line]
+    assert len(said) == 1 and "'arm'" in said[0] and "'tip'" not in said[0]
+    assert "Warning" not in result.stderr and "nan" not in result.stdout.lower()
+    # static torque of the lumped arm (1 kg at 0.3 m, 0.5 kg at 0.6 m) about +y under -9.81 z
+    (tmp_path / "ok.urdf").write_text(ARM.format(m="1", ixx="0.01", izz="0.01"))
+    result = run("simulate", tmp_path / "ok.urdf", "--duration", "0", "--json")
+    assert result.exit_code == 0 and "breaks the triangle" not in result.stderr
+    held = json.loads(result.stdout)["final"]["joints"]["j"]["holding"][0]
+    assert held == pytest.approx(-9.81 * (1 * 0.3 + 0.5 * 0.6), rel=1e-12)
+
+
+def test_mjcf_body_with_unreadable_geoms_names_the_geom_not_a_singular_matrix(tmp_path, run):
+    (tmp_path / "m.xml").write_text(
+        '<mujoco><asset><mesh name="hull" vertex="0 0 0 1 0 0 0 1 0 0 0 1"/></asset>\n'
+        '<worldbody><body name="b"><joint name="h" axis="0 1 0"/>\n'
+        '<geom type="mesh" mesh="hull" pos="0.5 0 0"/></body></worldbody></mujoco>')
+    result = run("simulate", tmp_path / "m.xml", "--duration", "0")
+    assert result.exit_code == 1
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "m.xml:2: link 'b'" in lines[0] and "hull" in lines[0], \
+        result.stderr
