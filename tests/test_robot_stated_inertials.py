@@ -59,3 +59,31 @@ def test_mjcf_body_with_unreadable_geoms_names_the_geom_not_a_singular_matrix(tm
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "m.xml:2: link 'b'" in lines[0] and "hull" in lines[0], \
         result.stderr
+
+
+def test_mimic_couplings_are_said_not_dropped(tmp_path, run):
+    """URDF <mimic> and SDF 1.11 <axis><mimic>: the engine has no coupling constraint; the run
+    goes on with each joint free, and the warning names the coupled joint."""
+    link = ('<link name="{n}"><inertial><origin xyz="0.1 0 0"/><mass value="1"/><inertia '
+            'ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>')
+    (tmp_path / "m.urdf").write_text(
+        '<robot name="r"><link name="base"/>' + link.format(n="a") + link.format(n="b")
+        + '<joint name="ja" type="continuous"><parent link="base"/><child link="a"/>'
+        '<axis xyz="0 1 0"/></joint><joint name="jb" type="prismatic"><parent link="base"/>'
+        '<child link="b"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" '
+        'velocity="1"/><mimic joint="ja" multiplier="0.1"/></joint></robot>')
+    result = run("simulate", tmp_path / "m.urdf", "--duration", "0")
+    assert result.exit_code == 0, result.stderr
+    assert "mimic" in result.stderr and "jb follows ja" in result.stderr
+    inertial = ('<inertial><mass>1</mass><inertia><ixx>0.01</ixx><iyy>0.01</iyy><izz>0.01</izz>'
+                '</inertia></inertial>')
+    (tmp_path / "m.sdf").write_text(
+        f'<sdf version="1.11"><model name="m"><link name="a">{inertial}</link>'
+        f'<link name="b">{inertial}</link>'
+        '<joint name="ja" type="revolute"><parent>world</parent><child>a</child><axis>'
+        '<xyz>0 1 0</xyz></axis></joint><joint name="jb" type="revolute"><parent>world</parent>'
+        '<child>b</child><axis><xyz>0 0 1</xyz><mimic joint="ja"><multiplier>2</multiplier>'
+        '</mimic></axis></joint></model></sdf>')
+    result = run("simulate", tmp_path / "m.sdf", "--duration", "0")
+    assert result.exit_code == 0, result.stderr
+    assert "<mimic> coupling of joint 'jb'" in result.stderr

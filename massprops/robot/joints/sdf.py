@@ -147,6 +147,9 @@ def _joint(node: Node, scopes: tuple[str, str], graph: _FrameGraph, v: Values, v
         axes.append(in_model[0].T @ _axis_in_model(axis, xyz_el, xyz, graph, in_model, v,
                                                     version))
         axes[-1] = unit_axis(v, xyz_el, axes[-1])
+        if axis.find("mimic") is not None:  # 1.11: no constraint here; said, not hidden
+            notes.add(f"a <mimic> coupling of joint {prefix + name!r}, not enforced (it moves "
+                      "on its own)")
         limit = axis.find("limit")
         lo = _number(limit, "lower", v)
         hi = _number(limit, "upper", v)

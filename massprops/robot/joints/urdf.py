@@ -26,9 +26,11 @@ _URDF_KINDS = {"revolute": "revolute", "continuous": "revolute", "prismatic": "p
 def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
     """URDF ``<joint name type>`` with ``<parent link>``, ``<child link>``, ``<origin xyz rpy>``
     (the child link frame in the parent link frame), ``<axis xyz>`` (joint frame; default
-    1 0 0, the specification's), ``<limit lower upper>`` and ``<dynamics damping friction>``."""
+    1 0 0, the specification's), ``<limit lower upper>`` and ``<dynamics damping friction>``.
+    A ``<mimic>`` coupling is not a constraint here: said in the notes (Gazebo classic and
+    Pinocchio's default reader leave it out too), never silently dropped."""
     v = Values(path)
-    joints, tree, notes = [], [], set()
+    joints, tree, notes, mimics = [], [], set(), []
     for node in root.findall("joint"):
         name = node.attrs.get("name")
         if not name:
@@ -62,6 +64,9 @@ def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
             damping = v.positive(dyn, "damping", v.number(dyn, "damping", 0.0), allow_zero=True)
             if v.number(dyn, "friction", 0.0):
                 notes.add("joint friction")
+        mimic = node.find("mimic")
+        if mimic is not None:  # a coupling the engine has no constraint for: said, not hidden
+            mimics.append(f"{name} follows {mimic.attrs.get('joint', '?')}")
         joints.append(RobotJoint(name, kind, parent, child, IDENTITY, axes, node, limits,
                                  damping))
         tree.append((parent, child, pose))
@@ -69,6 +74,9 @@ def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
     roots = [name for name in links if name not in children]
     poses = poses_from_tree(tree, roots)
     floating = frozenset(j.child for j in joints if j.kind == "free")
+    if mimics:
+        notes.add(f"<mimic> couplings, not enforced: each joint moves on its own "
+                  f"({', '.join(mimics[:4])}{' ...' if len(mimics) > 4 else ''})")
     if root.find("transmission") is not None:
         notes.add("transmissions (actuators)")
     return Mechanism(path, "urdf", tuple(joints), poses, floating, None, tuple(sorted(notes)))
