@@ -255,7 +255,10 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         if stated is not None and stated.mass > 0:
             masses = [stated.mass * w / sum(weights) for w in weights]
             total = stated.mass
-        elif model.format == "mjcf":
+        elif link.auto_mass is not None:  # SDF auto: the densities' shares of the given mass
+            masses = [link.auto_mass * w / sum(weights) for w in weights]
+            total = link.auto_mass
+        elif model.format == "mjcf" or all(g.density is not None for g in link.geometries):
             masses = weights
         else:
             return skipped(f"no stated mass to keep and no {setting_ref('density')}: give "
@@ -263,7 +266,7 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
                            "(kg/m³)", False)
     computed = combine(parts, masses, total)
     if stated is None:
-        if model.format != "mjcf":  # an MJCF body without one gets MuJoCo's sum over its geoms
+        if model.format != "mjcf" and link.inertial_node is None:  # MJCF, SDF auto: the sum
             warnings.append("no stated inertial: nothing to compare")
         comparison = None
     else:

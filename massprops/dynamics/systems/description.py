@@ -65,7 +65,9 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
     path = Path(path)
     masses, warnings = {}, []
     model = load_model(path, package_paths=package_paths)
-    if inertials == "computed" or model.format == "mjcf":
+    auto = {link.name for link in model.links if link.stated is None and link.geometries
+            and all(g.density is not None for g in link.geometries)}  # SDF <inertial auto>
+    if inertials == "computed" or model.format == "mjcf" or auto:
         report = analyze_model(path, package_paths=package_paths)
         model = report.model
         if inertials == "computed" and report.errors:
@@ -77,7 +79,8 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
             if use is not None:
                 masses[r.name] = (use.mass, np.asarray(use.center_of_mass, float),
                                   np.asarray(use.inertia, float))
-            elif r.error:  # MuJoCo's inertia from geoms that cannot be read: not massless
+            elif r.error and (model.format == "mjcf" or r.name in auto):
+                # the simulator's inertia from geoms that cannot be read: not massless
                 raise RobotModelError(report.errors[[x.name for x in report.links
                                                      if x.error].index(r.name)])
             elif inertials == "computed" and r.link.geometries:
@@ -87,10 +90,26 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
             if link.stated is not None:
                 s = link.stated
                 masses[link.name] = (s.mass, s.center_of_mass, s.inertia)
+    if model.format == "sdf" and inertials == "stated":
+        warnings += _sdf_defaults(model, masses)
     warnings += _judged(masses, path, {link.name: link.node for link in model.links})
     mech = read_mechanism(model)
     warnings += _said(mech, path)
     return _build(mech, masses, base, warnings, path)
+
+
+def _sdf_defaults(model, masses: dict) -> list[str]:
+    """SDFormat gives a link without ``<inertial>`` 1 kg and unit moments at its origin
+    (sdformat's Link, as Gazebo simulates it): those links get it, named in one warning."""
+    bare = [link.name for link in model.links
+            if link.name not in masses and link.inertial_node is None]
+    for name in bare:
+        masses[name] = (1.0, np.zeros(3), np.eye(3))
+    if not bare:
+        return []
+    return [f"link(s) {', '.join(map(repr, bare[:4]))}{' ...' if len(bare) > 4 else ''} have "
+            "no <inertial>: SDFormat's default, 1 kg with unit moments (kg·m²) at the link "
+            "origin, as Gazebo simulates them"]
 
 
 _FIX = ("fix the inertial, or simulate a scene with 'inertials: computed' (from the link's "
