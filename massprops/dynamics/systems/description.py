@@ -149,7 +149,7 @@ def _judged(masses: dict, path: Path, nodes: dict) -> list[str]:
 
 
 def _said(mech: Mechanism, path: Path) -> list[str]:
-    out = []
+    out = list(mech.remarks)
     if any(j.limits for j in mech.joints):
         named = [j.name for j in mech.joints if j.limits]
         out.append(f"joint limits are not enforced (the systems engine has no limits "

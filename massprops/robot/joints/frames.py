@@ -74,7 +74,8 @@ class Mechanism:
     floating : links that the description itself sets free (an MJCF ``<freejoint>``, a URDF
     ``floating`` joint). gravity : (3,) m/s² the description states (MJCF ``<option
     gravity>``), else None. notes : what the description holds that a simulation ignores
-    (friction, armature, actuators), one phrase each.
+    (friction, armature, actuators), one phrase each. remarks : how a number here differs from
+    the format's own (MJCF ``ref``), one warning line each.
     """
 
     path: Path
@@ -84,6 +85,7 @@ class Mechanism:
     floating: frozenset = frozenset()
     gravity: np.ndarray | None = None
     notes: tuple[str, ...] = field(default=())
+    remarks: tuple[str, ...] = field(default=())
 
 
 def compose(a: Pose, b: Pose) -> Pose:

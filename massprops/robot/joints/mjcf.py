@@ -11,7 +11,9 @@ earlier ones); two hinges through one point are a universal joint, a hinge and a
 axis a cylindrical joint (named ``a+b``, when neither has damping or a spring); any other
 set is a chain of massless stages, one joint each (`_Reader._stages`). ``<equality><connect
 body1 body2 anchor>`` (anchor in body1's frame) is a loop: a spherical joint between the two
-bodies at the anchor. ``ref`` must be 0 (the zero pose is the pose as written).
+bodies at the anchor. ``ref`` is the coordinate MuJoCo gives the pose as written; here that pose
+is the zero, so coordinates, ``springref`` and ``range`` count from it (shifted by -ref), said
+once in the mechanism's remarks.
 """
 
 from __future__ import annotations
@@ -54,6 +56,7 @@ class _Reader:
         self.joints: list[RobotJoint] = []
         self.floating: set = set()
         self.notes: set = set()
+        self.refs: list[str] = []
         self.next_id = 1
 
     def walk(self, node: Node, childclass: str, frame, body: str, world) -> None:
@@ -100,10 +103,7 @@ class _Reader:
         axes = [unit_axis(v, n, v.numbers(n, a["axis"], "axis=", 3, 'axis="0 0 1"'))
                 if "axis" in a else np.array([0.0, 0.0, 1.0]) for n, (_, a) in zip(nodes, read)]
         kinds = [k for k, _ in read]
-        for n, (k, a) in zip(nodes, read):
-            if k in ("hinge", "slide") and float(a.get("ref", "0")) != 0.0:
-                raise v.error(n, f"joint {a.get('name', '?')!r}: ref={a['ref']!r}: massprops "
-                                 "starts from the pose as written (ref 0); move the body instead")
+        for _, a in read:
             if float(a.get("armature", "0")):
                 self.notes.add("joint armature")
             if float(a.get("frictionloss", "0")):
@@ -113,6 +113,18 @@ class _Reader:
         stiff = [float(a.get("stiffness", "0")) for _, a in read]
         rest = [self.compiler.radians(float(a.get("springref", "0"))) if k == "hinge"
                 else float(a.get("springref", "0")) for k, a in read]
+        # ref: MuJoCo's coordinate of the pose as written; here that pose is 0, so the spring's
+        # rest and the range move by -ref (the motion is the same, the numbers shift)
+        for i, (n, (k, a)) in enumerate(zip(nodes, read)):
+            if k not in ("hinge", "slide") or "ref" not in a:
+                continue
+            ref = float(v.numbers(n, a["ref"], "ref=", 1, 'ref="0"')[0])
+            ref = self.compiler.radians(ref) if k == "hinge" else ref
+            if ref != 0.0:
+                rest[i] -= ref
+                if limits[i] is not None:
+                    limits[i] = (limits[i][0] - ref, limits[i][1] - ref)
+                self.refs.append(names[i])
         if len(nodes) == 1:
             kind = _KINDS[kinds[0]]
             if kind == "free":
@@ -191,8 +203,12 @@ def mjcf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
                                   'gravity="0 0 -9.81"')
     if root.find("actuator") is not None:
         r.notes.add("actuators")
+    remarks = () if not r.refs else (
+        f"joint(s) {', '.join(r.refs[:4])}{' ...' if len(r.refs) > 4 else ''} have a ref: "
+        "their coordinates here count from the pose as written (MuJoCo's qpos minus ref); "
+        "springref and range are shifted alike, the motion is MuJoCo's",)
     return Mechanism(path, "mjcf", tuple(joints), r.poses, frozenset(r.floating), gravity,
-                     tuple(sorted(r.notes)))
+                     tuple(sorted(r.notes)), remarks)
 
 
 def _loop(r: _Reader, node: Node, k: int) -> RobotJoint | None:
