@@ -113,3 +113,37 @@ def test_ref_counts_coordinates_from_the_written_pose(tmp_path, run):
         # measured: within 2e-9 (MuJoCo's RK4 at 2e-5 s against the adaptive run)
         assert mine == pytest.approx(data.qpos[model.joint(name).qposadr[0]] - ref[name],
                                      abs=1e-7), name
+
+
+REPLICATE = """<mujoco>
+  <option timestep="2e-5" integrator="RK4"><flag contact="disable"/></option>
+  <worldbody>
+    <replicate count="3" offset="0.3 0 0" euler="0 0 20" sep="-">
+      <body name="pend" pos="0 0.1 1" euler="0 15 0">
+        <joint name="h" axis="1 0 0" damping="0.01"/>
+        <inertial pos="0 0.05 -0.2" mass="0.4" diaginertia="0.003 0.003 0.001"/>
+      </body>
+    </replicate>
+  </worldbody>
+</mujoco>"""
+
+
+@pytest.mark.slow
+def test_replicated_bodies_move_as_mujoco_moves_them(tmp_path, run):
+    """<replicate>: each copy placed by the previous one's pose and offset/euler, names suffixed
+    (pend-0, h-0, ...), as MuJoCo expands it."""
+    mujoco = pytest.importorskip("mujoco")
+    (tmp_path / "r.xml").write_text(REPLICATE)
+    result = run("simulate", tmp_path / "r.xml", "--duration", "0.3", "--json")
+    assert result.exit_code == 0, result.stderr
+    out = json.loads(result.stdout)["final"]
+    model = mujoco.MjModel.from_xml_string(REPLICATE)
+    data = mujoco.MjData(model)
+    for _ in range(round(0.3 / model.opt.timestep)):
+        mujoco.mj_step(model, data)
+    for i in range(3):
+        mine = out["joints"][f"h-{i}"]["coordinates"][0]
+        assert abs(mine) > 1e-2
+        assert mine == pytest.approx(data.qpos[model.joint(f"h-{i}").qposadr[0]], abs=1e-7)
+        assert out["bodies"][f"pend-{i}"]["position"] == pytest.approx(
+            data.xipos[model.body(f"pend-{i}").id], abs=1e-7)

@@ -23,7 +23,12 @@ from pathlib import Path
 import numpy as np
 
 from massprops.robot.formats.mjcf import _Compiler, _Defaults, _pose
-from massprops.robot.formats.mjcf_tree import expand_includes
+from massprops.robot.formats.mjcf_tree import (
+    expand_includes,
+    replicate_frames,
+    replicate_suffix,
+)
+from massprops.robot.formats.poses import euler_matrix
 from massprops.robot.formats.values import Values
 from massprops.robot.formats.xmltree import Node
 from massprops.robot.joints.frames import (
@@ -57,6 +62,7 @@ class _Reader:
         self.floating: set = set()
         self.notes: set = set()
         self.refs: list[str] = []
+        self.suffix = ""  # the name suffix inside <replicate> copies
         self.next_id = 1
 
     def walk(self, node: Node, childclass: str, frame, body: str, world) -> None:
@@ -68,13 +74,35 @@ class _Reader:
                          else child.attrs)
                 inner = compose(frame, _pose(attrs, child, self.compiler, self.v))
                 self.walk(child, child.attrs.get("childclass", childclass), inner, body, world)
-            elif child.tag in ("replicate", "attach"):
-                raise self.v.error(child, f"<{child.tag}> is not read as a mechanism yet; "
-                                          "expand it (mujoco.MjSpec, mj_saveLastXML) first")
+            elif child.tag == "replicate":
+                self.replicate(child, childclass, frame, body, world)
+            elif child.tag == "attach":
+                raise self.v.error(child, "<attach> is not read as a mechanism yet; expand it "
+                                          "(mujoco.MjSpec, mj_saveLastXML) first")
+
+    def replicate(self, node: Node, childclass: str, frame, body: str, world) -> None:
+        """``count`` copies, each placed by the previous one's pose and `offset`/`euler`, every
+        name inside suffixed (the parser's rule, `mjcf_tree.replicate_frames`)."""
+        v, compiler = self.v, self.compiler
+        count = v.number(node, "count")
+        if count is None or count != int(count) or count < 1:
+            raise v.error(node, f"count={node.attrs.get('count')!r}: expected a whole number "
+                                ">= 1")
+        rotation = euler_matrix([compiler.radians(e) for e in v.attr(node, "euler", 3,
+                                                                       [0, 0, 0])],
+                                compiler.eulerseq)
+        outer = self.suffix
+        try:
+            for i, pose in enumerate(replicate_frames(int(count), rotation,
+                                                      v.attr(node, "offset", 3, [0, 0, 0]))):
+                self.suffix = replicate_suffix(int(count), i, node.attrs.get("sep", "")) + outer
+                self.walk(node, childclass, compose(frame, pose), body, world)
+        finally:
+            self.suffix = outer
 
     def body(self, node: Node, childclass: str, frame, parent: str, parent_world) -> None:
         body_id, self.next_id = self.next_id, self.next_id + 1
-        name = node.attrs.get("name") or f"body#{body_id}"
+        name = node.attrs["name"] + self.suffix if node.attrs.get("name") else f"body#{body_id}"
         world = compose(parent_world, compose(frame, _pose(node.attrs, node, self.compiler,
                                                            self.v)))
         own = [c for c in node.children if c.tag in ("joint", "freejoint")]
@@ -97,7 +125,8 @@ class _Reader:
         massless stages (see `_stages`)."""
         v = self.v
         read = [self.one(n, childclass) for n in nodes]
-        names = [a.get("name") or f"{body}.joint{k}" for k, (_, a) in enumerate(read)]
+        names = [a["name"] + self.suffix if a.get("name") else f"{body}.joint{k}"
+                 for k, (_, a) in enumerate(read)]
         pos = [v.numbers(n, a["pos"], "pos=", 3, 'pos="0 0 0"') if "pos" in a else np.zeros(3)
                for n, (_, a) in zip(nodes, read)]
         axes = [unit_axis(v, n, v.numbers(n, a["axis"], "axis=", 3, 'axis="0 0 1"'))
