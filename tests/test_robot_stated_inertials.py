@@ -34,30 +34,38 @@ def test_impossible_inertials_are_refused_in_one_line(tmp_path, run, m, ixx, izz
 
 def test_triangle_breaking_inertia_is_said_and_point_masses_are_taken(tmp_path, run):
     """izz 0.05 > ixx + iyy = 0.02: warned, simulated; the tip's -5e-20 is a point mass's
-    round-off (iCub writes such), no warning, no NaN."""
+    round-off (iCub writes such), no warning, no NaN. A link's negative moment that its welded
+    neighbour outweighs (TIAGo's antennas on its base) is said, and the body simulated."""
     (tmp_path / "r.urdf").write_text(ARM.format(m="1", ixx="0.01", izz="0.05"))
     result = run("simulate", tmp_path / "r.urdf", "--duration", "0")
     assert result.exit_code == 0, result.stderr
-    said = [line for line in result.stderr.splitlines() if "breaks the triangle" in line]
+    said = [line for line in result.stderr.splitlines() if "not physically valid" in line]
     assert len(said) == 1 and "'arm'" in said[0] and "'tip'" not in said[0]
     assert "Warning" not in result.stderr and "nan" not in result.stdout.lower()
     # static torque of the lumped arm (1 kg at 0.3 m, 0.5 kg at 0.6 m) about +y under -9.81 z
     (tmp_path / "ok.urdf").write_text(ARM.format(m="1", ixx="0.01", izz="0.01"))
     result = run("simulate", tmp_path / "ok.urdf", "--duration", "0", "--json")
-    assert result.exit_code == 0 and "breaks the triangle" not in result.stderr
+    assert result.exit_code == 0 and "not physically valid" not in result.stderr
     held = json.loads(result.stdout)["final"]["joints"]["j"]["holding"][0]
     assert held == pytest.approx(-9.81 * (1 * 0.3 + 0.5 * 0.6), rel=1e-12)
+    outweighed = ARM.format(m="1", ixx="0.01", izz="0.01").replace(
+        'ixx="-5e-20" ixy="0" ixz="0" iyy="-5e-20"', 'ixx="-0.001" ixy="0" ixz="0" iyy="0.001"')
+    (tmp_path / "w.urdf").write_text(outweighed)
+    result = run("simulate", tmp_path / "w.urdf", "--duration", "0")
+    assert result.exit_code == 0, result.stderr
+    said = [line for line in result.stderr.splitlines() if "not physically valid" in line]
+    assert len(said) == 1 and "'tip'" in said[0] and "'arm'" not in said[0]
 
 
 def test_mjcf_body_with_unreadable_geoms_names_the_geom_not_a_singular_matrix(tmp_path, run):
     (tmp_path / "m.xml").write_text(
-        '<mujoco><asset><mesh name="hull" vertex="0 0 0 1 0 0 0 1 0 0 0 1"/></asset>\n'
+        '<mujoco><asset><mesh name="hull" file="missing.stl"/></asset>\n'
         '<worldbody><body name="b"><joint name="h" axis="0 1 0"/>\n'
         '<geom type="mesh" mesh="hull" pos="0.5 0 0"/></body></worldbody></mujoco>')
     result = run("simulate", tmp_path / "m.xml", "--duration", "0")
     assert result.exit_code == 1
     lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and "m.xml:2: link 'b'" in lines[0] and "hull" in lines[0], \
+    assert len(lines) == 1 and "m.xml:2: link 'b'" in lines[0] and "missing.stl" in lines[0], \
         result.stderr
 
 

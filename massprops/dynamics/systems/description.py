@@ -24,12 +24,12 @@ from pathlib import Path
 import numpy as np
 
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
+from massprops.dynamics.systems.inertials import check_bodies, judged, sdf_defaults
 from massprops.dynamics.systems.model import WORLD, SystemBody, SystemJoint
 from massprops.dynamics.systems.tree import kinematics, mass_matrix
 from massprops.errors import RobotModelError
 from massprops.robot.joints.frames import WORLD_LINK, Mechanism, RobotJoint, compose
 from massprops.robot.mechanism import read_mechanism
-from massprops.tolerances import INERTIA_VALIDITY_RTOL
 
 __all__ = ["Description", "describe"]
 
@@ -91,61 +91,15 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
                 s = link.stated
                 masses[link.name] = (s.mass, s.center_of_mass, s.inertia)
     if model.format == "sdf" and inertials == "stated":
-        warnings += _sdf_defaults(model, masses)
-    warnings += _judged(masses, path, {link.name: link.node for link in model.links})
+        warnings += sdf_defaults(model, masses)
+    nodes = {link.name: link.node for link in model.links}
+    said, tol = judged(masses, path, nodes)
+    warnings += said
     mech = read_mechanism(model)
     warnings += _said(mech, path)
-    return _build(mech, masses, base, warnings, path)
-
-
-def _sdf_defaults(model, masses: dict) -> list[str]:
-    """SDFormat gives a link without ``<inertial>`` 1 kg and unit moments at its origin
-    (sdformat's Link, as Gazebo simulates it): those links get it, named in one warning."""
-    bare = [link.name for link in model.links
-            if link.name not in masses and link.inertial_node is None]
-    for name in bare:
-        masses[name] = (1.0, np.zeros(3), np.eye(3))
-    if not bare:
-        return []
-    return [f"link(s) {', '.join(map(repr, bare[:4]))}{' ...' if len(bare) > 4 else ''} have "
-            "no <inertial>: SDFormat's default, 1 kg with unit moments (kg·m²) at the link "
-            "origin, as Gazebo simulates them"]
-
-
-_FIX = ("fix the inertial, or simulate a scene with 'inertials: computed' (from the link's "
-        "geometry)")
-
-
-def _judged(masses: dict, path: Path, nodes: dict) -> list[str]:
-    """RobotModelError for a link whose inertial no body can have (negative or non-finite mass,
-    a negative principal moment); one warning naming the links whose moments break the triangle
-    inequality (MuJoCo refuses them; URDF tools take them): simulated as written. A moment counts
-    as negative below -INERTIA_VALIDITY_RTOL times the description's scale (the largest link
-    inertia about its frame's origin), so a point mass written with zeros, or with -5e-20
-    round-off (iCub), is a point mass."""
-    # the scale: each link's inertia about its own frame's origin, the largest of them
-    largest = max((float(np.abs(j).max()) + abs(m) * float(c @ c)
-                   for m, c, j in masses.values()), default=0.0)
-    tol = INERTIA_VALIDITY_RTOL * largest if np.isfinite(largest) else 0.0
-    broken = []
-    for name, (mass, com, inertia) in masses.items():
-        node = nodes.get(name)
-        where = (f"{path}: " if node is None else f"{node.file or path}:{node.line}: ") + \
-            f"link {name!r}: the stated inertial"
-        if not (np.isfinite(mass) and mass >= 0 and np.isfinite(com).all()
-                and np.isfinite(inertia).all()):
-            raise RobotModelError(f"{where} has a negative or non-finite mass or entry; {_FIX}")
-        moments = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
-        if moments[0] < -tol:
-            raise RobotModelError(f"{where} has a negative principal moment ({moments[0]:.6g} "
-                                  f"kg·m²): no body has it; {_FIX}")
-        if moments[2] > moments[0] + moments[1] + tol:
-            broken.append(name)
-    if not broken:
-        return []
-    return [f"link(s) {', '.join(map(repr, broken[:4]))}{' ...' if len(broken) > 4 else ''}: "
-            "the stated inertia breaks the triangle inequality (a principal moment above the sum "
-            "of the other two): no rigid body has it; simulated as written"]
+    desc = _build(mech, masses, base, warnings, path)
+    check_bodies(desc, tol, nodes)
+    return desc
 
 
 def _said(mech: Mechanism, path: Path) -> list[str]:
@@ -257,7 +211,7 @@ def _lumped(head: str, members: list[str], poses: dict, masses: dict) -> SystemB
         d = c - com
         inertia += jw + m * ((d @ d) * np.eye(3) - np.outer(d, d))
     spread = max((float(np.linalg.norm(poses[n][1] - com)) for n in members), default=0.0)
-    # a point mass's inertia may carry -1e-20 round-off (`_judged`): no square root of it
+    # a point mass's inertia may carry -1e-20 round-off (`inertials.judged`): no square root of it
     gyration = float(np.sqrt(max(np.trace(inertia), 0.0) / (2 * total))) if total > 0 else 0.0
     return SystemBody(head, float(total), rot0.T @ inertia @ rot0, rot0, com,
                       max(2 * spread, 2 * gyration))
