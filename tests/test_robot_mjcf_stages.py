@@ -147,3 +147,53 @@ def test_replicated_bodies_move_as_mujoco_moves_them(tmp_path, run):
         assert mine == pytest.approx(data.qpos[model.joint(f"h-{i}").qposadr[0]], abs=1e-7)
         assert out["bodies"][f"pend-{i}"]["position"] == pytest.approx(
             data.xipos[model.body(f"pend-{i}").id], abs=1e-7)
+
+
+SITE_LOOP = """<mujoco>
+  <worldbody>
+    <body name="crank">
+      <joint name="A" axis="0 1 0"/>
+      <inertial pos="0.1 0 0" mass="1" diaginertia="0.001 0.004 0.004"/>
+      <body name="coupler" pos="0.2 0 0">
+        <joint name="B" axis="0 1 0"/>
+        <inertial pos="0.2 0 0.05" mass="1" diaginertia="0.002 0.01 0.01"/>
+        <site name="s1" pos="0.3 0 0.2"/>
+      </body>
+    </body>
+    <body name="rocker" pos="0.5 0 0">
+      <joint name="C" axis="0 1 0"/>
+      <inertial pos="0 0 0.1" mass="0.5" diaginertia="0.002 0.002 0.0005"/>
+      <frame pos="0 0 0.1"><site name="s2" pos="0 0 0.1"/></frame>
+    </body>
+  </worldbody>
+  <equality>{connect}</equality>
+</mujoco>"""
+
+
+@pytest.mark.slow
+def test_site_connect_is_the_body_connect_at_the_sites(tmp_path, run):
+    """<connect site1 site2> with the sites meeting as written is <connect body1 body2 anchor>
+    with the anchor at site1 (in body1's frame): one mechanism, one motion. Sites apart as
+    written are refused in one line."""
+    out = {}
+    for name, connect in (("sites", '<connect site1="s1" site2="s2"/>'),
+                          ("bodies", '<connect body1="coupler" body2="rocker" '
+                                     'anchor="0.3 0 0.2"/>')):
+        (tmp_path / f"{name}.xml").write_text(SITE_LOOP.format(connect=connect))
+        result = run("simulate", tmp_path / f"{name}.xml", "--duration", "0.3", "--json")
+        assert result.exit_code == 0, result.stderr
+        out[name] = json.loads(result.stdout)
+    assert out["sites"]["diagnostics"]["degrees_of_freedom"] == 1
+    for name in "ABC":
+        mine = out["sites"]["final"]["joints"][name]["coordinates"][0]
+        assert abs(mine) > 1e-3
+        assert mine == pytest.approx(out["bodies"]["final"]["joints"][name]["coordinates"][0],
+                                     abs=1e-12)
+    (tmp_path / "apart.xml").write_text(SITE_LOOP.format(
+        connect='<connect site1="s1" site2="s2"/>').replace('pos="0 0 0.1"/></frame>',
+                                                            'pos="0 0 0.15"/></frame>'))
+    result = run("simulate", tmp_path / "apart.xml", "--duration", "0")
+    assert result.exit_code == 1
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "apart.xml:18" in lines[0] and "0.05 m apart" in lines[0], \
+        result.stderr

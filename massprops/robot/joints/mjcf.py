@@ -10,7 +10,8 @@ to its parent. Several joints in one body compose in order (each later one turns
 earlier ones); two hinges through one point are a universal joint, a hinge and a slide along one
 axis a cylindrical joint (named ``a+b``, when neither has damping or a spring); any other
 set is a chain of massless stages, one joint each (`_Reader._stages`). ``<equality><connect
-body1 body2 anchor>`` (anchor in body1's frame) is a loop: a spherical joint between the two
+body1 body2 anchor>`` (anchor in body1's frame), or ``site1 site2`` (sites that coincide as
+written), is a loop: a spherical joint between the two
 bodies at the anchor. ``ref`` is the coordinate MuJoCo gives the pose as written; here that pose
 is the zero, so coordinates, ``springref`` and ``range`` count from it (shifted by -ref), said
 once in the mechanism's remarks.
@@ -63,6 +64,7 @@ class _Reader:
         self.notes: set = set()
         self.refs: list[str] = []
         self.suffix = ""  # the name suffix inside <replicate> copies
+        self.sites: dict = {}  # name -> (body, point in the model frame at the zero pose)
         self.next_id = 1
 
     def walk(self, node: Node, childclass: str, frame, body: str, world) -> None:
@@ -76,6 +78,10 @@ class _Reader:
                 self.walk(child, child.attrs.get("childclass", childclass), inner, body, world)
             elif child.tag == "replicate":
                 self.replicate(child, childclass, frame, body, world)
+            elif child.tag == "site" and child.attrs.get("name"):
+                at = compose(world, compose(frame, _pose(self.defaults.attrs(child, childclass),
+                                                         child, self.compiler, self.v)))
+                self.sites[child.attrs["name"] + self.suffix] = (body, at[1])
             elif child.tag == "attach":
                 raise self.v.error(child, "<attach> is not read as a mechanism yet; expand it "
                                           "(mujoco.MjSpec, mj_saveLastXML) first")
@@ -248,14 +254,38 @@ def _loop(r: _Reader, node: Node, k: int) -> RobotJoint | None:
     if node.tag != "connect":
         raise v.error(node, f"<{node.tag}> equality is not supported as a joint (only "
                             "<connect body1 body2 anchor>, a spherical loop joint)")
-    if "body1" not in a:
-        raise v.error(node, "massprops reads <connect body1= body2= anchor=> (not site1/site2); "
-                            "give the bodies and the anchor in body1's frame")
-    body1, body2 = a["body1"], a.get("body2", WORLD_LINK)
+    if "site1" in a:
+        body1, body2, anchor = _sites(r, node, a)
+    elif "body1" not in a:
+        raise v.error(node, "<connect> needs body1= (and anchor=) or site1= and site2=")
+    else:
+        body1, body2 = a["body1"], a.get("body2", WORLD_LINK)
+        anchor = v.numbers(node, a.get("anchor", "0 0 0"), "anchor=", 3, 'anchor="0 0 0"')
     for b in (body1, body2):
         if b != WORLD_LINK and b not in r.poses:
             raise v.error(node, f"no body named {b!r}; check the spelling")
-    anchor = v.numbers(node, a.get("anchor", "0 0 0"), "anchor=", 3, 'anchor="0 0 0"')
     name = a.get("name") or f"connect{k}"
     return RobotJoint(name, "spherical", body2, body1, (np.eye(3), anchor), np.zeros((0, 3)),
                       node, loop=True)
+
+
+_SITES_APART = 1e-9  # m: two sites "coincide" as written up to round-off of written numbers
+
+
+def _sites(r: _Reader, node: Node, a: dict):
+    """A site-based connect (MuJoCo 3): (body1, body2, the anchor in body1's frame). The sites
+    must coincide as written: massprops starts from the pose as written, closed."""
+    v = r.v
+    if "site2" not in a:
+        raise v.error(node, "<connect site1=...> needs site2= as well")
+    for s in (a["site1"], a["site2"]):
+        if s not in r.sites:
+            raise v.error(node, f"no site named {s!r}; check the spelling")
+    (body1, p1), (body2, p2) = r.sites[a["site1"]], r.sites[a["site2"]]
+    gap = float(np.linalg.norm(p1 - p2))
+    if gap > _SITES_APART:
+        raise v.error(node, f"sites {a['site1']!r} and {a['site2']!r} are {gap:.6g} m apart as "
+                            "written: massprops starts from the written pose with every loop "
+                            "closed; move a site or a body so that they meet")
+    rot, t = r.poses[body1] if body1 != WORLD_LINK else IDENTITY
+    return body1, body2, rot.T @ (p1 - t)
