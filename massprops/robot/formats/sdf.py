@@ -243,6 +243,10 @@ def _geometry(element: Node, link: str, frames: _FrameGraph, v: Values, path: Pa
         return Geometry("sphere", dims=(length("radius"),), **common)
     if tag in ("cylinder", "capsule"):
         return Geometry(tag, dims=(length("radius"), length("length")), **common)
+    if tag == "cone":  # 1.11: frame at mid-height (sdformat's Cone), the solid's at its COM
+        radius, height = length("radius"), length("length")
+        common["translation"] = xyz + rotation @ np.array([0.0, 0.0, -height / 4])
+        return Geometry("cone", dims=(radius, height), **common)
     if tag == "ellipsoid":
         radii = v.child_text(shape, "radii", 3, example="<radii>0.1 0.2 0.3</radii>")
         if radii is None:
@@ -265,5 +269,6 @@ def _geometry(element: Node, link: str, frames: _FrameGraph, v: Values, path: Pa
         warnings.append(f"<{tag}> (line {shape.line}) has no finite volume; ignored")
         return None
     return Geometry(tag, problem=f"<{tag}> geometry (line {shape.line}) is not supported; use "
-                                 "box, cylinder, sphere, capsule, ellipsoid or mesh", **common)
+                                 "box, cylinder, sphere, capsule, ellipsoid, cone or mesh",
+                    **common)
 
