@@ -197,3 +197,25 @@ def test_site_connect_is_the_body_connect_at_the_sites(tmp_path, run):
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "apart.xml:18" in lines[0] and "0.05 m apart" in lines[0], \
         result.stderr
+
+
+def test_an_attached_first_body_does_not_make_the_mechanism_its_file(tmp_path, run):
+    """The first body comes from <attach>: the mechanism is still read from the main file
+    (where <attach> is refused in one line), never from the attached file alone."""
+    (tmp_path / "arm.xml").write_text(
+        '<mujoco><worldbody><body name="arm"><joint name="h"/>'
+        '<inertial pos="0.1 0 0" mass="1" diaginertia="0.01 0.01 0.01"/></body></worldbody>'
+        '</mujoco>')
+    for first in ("attach", "body"):
+        attach = '<attach model="arm" body="arm" prefix="a_"/>'
+        own = ('<body name="base"><joint name="k" axis="0 1 0"/><inertial pos="0 0 -0.1" '
+               'mass="2" diaginertia="0.02 0.02 0.02"/></body>')
+        parts = (attach, own) if first == "attach" else (own, attach)
+        (tmp_path / "main.xml").write_text(
+            '<mujoco><asset><model name="arm" file="arm.xml"/></asset><worldbody>\n'
+            + "\n".join(parts) + '\n</worldbody></mujoco>')
+        result = run("simulate", tmp_path / "main.xml", "--duration", "0")
+        assert result.exit_code == 1
+        lines = result.stderr.strip().splitlines()
+        line = 2 if first == "attach" else 3
+        assert len(lines) == 1 and f"main.xml:{line}: <attach>" in lines[0], result.stderr
