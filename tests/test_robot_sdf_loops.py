@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from massprops.dynamics.systems.description import describe
@@ -59,3 +60,26 @@ def test_a_ring_of_carriers_moves_as_the_same_loop_written_the_other_way(tmp_pat
         assert abs(ring) > 1e-3  # it moved
         assert ring == pytest.approx(out["tree"]["final"]["joints"][name]["coordinates"][0],
                                      abs=1e-8)
+
+
+def test_a_joint_may_name_frames_for_its_links(tmp_path):
+    """SDF 1.7+: <parent>/<child> may name a <frame>, standing for the link it is attached to
+    (through other frames); the joint is then the same as one naming the links."""
+    links = ('<link name="a"><pose>0 0 1 0 0 0</pose>' + INERTIA.format(c=0.1, m=1) + '</link>'
+             '<link name="b"><pose>0.3 0 1 0 0 0</pose>' + INERTIA.format(c=0.2, m=2)
+             + '</link><frame name="fa" attached_to="a"><pose>0.1 0 0 0 0 0</pose></frame>'
+             '<frame name="fa2" attached_to="fa"/><frame name="fb" attached_to="b"/>')
+    descs = {}
+    for case, (parent, child) in {"links": ("a", "b"), "frames": ("fa2", "fb")}.items():
+        (tmp_path / f"{case}.sdf").write_text(
+            f'<sdf version="1.8"><model name="m">{links}'
+            '<joint name="w" type="fixed"><parent>world</parent><child>a</child></joint>'
+            f'<joint name="j" type="revolute"><parent>{parent}</parent><child>{child}</child>'
+            '<axis><xyz>0 1 0</xyz></axis></joint></model></sdf>')
+        descs[case] = describe(tmp_path / f"{case}.sdf")
+    for case in descs:
+        (j,) = descs[case].joints
+        assert j.name == "j" and j.kind == "revolute"
+    a, b = descs["links"].joints[0], descs["frames"].joints[0]
+    assert (a.a, a.b) == (b.a, b.b)
+    assert np.allclose(a.point, b.point) and np.allclose(a.axes, b.axes)

@@ -99,9 +99,10 @@ def _names(model: Node) -> list[str]:
 
 
 def _end(node: Node, tag: str, scopes: tuple[str, str], links: set, v: Values,
-         name: str) -> str:
-    """The link a joint's <parent>/<child> names: in the joint's model (its links' prefix), or
-    a nested model's link written ``inner::link`` (scoped by every enclosing model's name)."""
+         name: str, graph: _FrameGraph) -> str:
+    """The link a joint's <parent>/<child> names: in the joint's model (its links' prefix), a
+    nested model's link written ``inner::link`` (scoped by every enclosing model's name), or
+    (1.7+) a frame of the model, standing for the link it is attached to."""
     el = node.find(tag)
     text = "" if el is None else el.text.strip()
     if not text:
@@ -111,8 +112,27 @@ def _end(node: Node, tag: str, scopes: tuple[str, str], links: set, v: Values,
     for scope in scopes:
         if scope + text in links:
             return scope + text
+    attached = _attached_link(text, graph)
+    for scope in scopes if attached is not None else ():
+        if scope + attached in links:
+            return scope + attached
     raise v.error(el, f"joint {name!r}: no link named {text!r} in this model; check the "
                       "spelling")
+
+
+def _attached_link(frame: str, graph: _FrameGraph) -> str | None:
+    """The link an SDF 1.7+ ``<frame>`` (or a joint) is attached to, following ``attached_to``
+    through other frames and joints (a joint: its child); a name outside this model's own
+    (``inner::link``) is returned for the caller to look up; None for a frame attached to the
+    model frame, or a loop."""
+    seen = set()
+    while frame in graph.nodes and frame not in seen:
+        seen.add(frame)
+        node, default = graph.nodes[frame]
+        if node.tag == "link":
+            return frame
+        frame = default
+    return None if frame in seen or frame == "__model__" else frame
 
 
 def _joint(node: Node, scopes: tuple[str, str], graph: _FrameGraph, v: Values, version,
@@ -126,8 +146,8 @@ def _joint(node: Node, scopes: tuple[str, str], graph: _FrameGraph, v: Values, v
                             f"engine; use one of {', '.join(_KINDS)}")
     kind = _KINDS[written]
     prefix = scopes[0]
-    parent = _end(node, "parent", scopes, links, v, name)
-    child = _end(node, "child", scopes, links, v, name)
+    parent = _end(node, "parent", scopes, links, v, name, graph)
+    child = _end(node, "child", scopes, links, v, name, graph)
     local_child = child[len(prefix):] if child.startswith(prefix) else child
     if "::" in local_child or not child.startswith(prefix):
         raise v.error(node, f"joint {name!r}: a child link inside a nested model "
