@@ -95,3 +95,22 @@ def test_mimic_couplings_are_said_not_dropped(tmp_path, run):
     result = run("simulate", tmp_path / "m.sdf", "--duration", "0")
     assert result.exit_code == 0, result.stderr
     assert "<mimic> coupling of joint 'jb'" in result.stderr
+
+
+def test_urdf_planar_joint_is_two_shifts_and_a_turn(tmp_path, run):
+    """A planar joint normal to y (the x-z plane): e1 = z, e2 = x, the turn about y; a body
+    falling from rest under gravity -z: name.x = -g t²/2, the rest stay 0 (gravity has no moment
+    about the centre of mass)."""
+    (tmp_path / "p.urdf").write_text(
+        '<robot name="r"><link name="base"/><link name="slab"><inertial><origin xyz="0.2 0 0.1"/>'
+        '<mass value="2"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.015"/>'
+        '</inertial></link><joint name="p" type="planar"><parent link="base"/>'
+        '<child link="slab"/><origin xyz="0 0 1"/><axis xyz="0 1 0"/></joint></robot>')
+    result = run("simulate", tmp_path / "p.urdf", "--duration", "0.5", "--json")
+    assert result.exit_code == 0, result.stderr
+    out = json.loads(result.stdout)
+    assert out["diagnostics"]["degrees_of_freedom"] == 3
+    joints = out["final"]["joints"]
+    assert joints["p.x"]["coordinates"][0] == pytest.approx(-9.81 * 0.5**2 / 2, rel=1e-9)
+    assert abs(joints["p.y"]["coordinates"][0]) < 1e-12
+    assert abs(joints["p"]["coordinates"][0]) < 1e-12
