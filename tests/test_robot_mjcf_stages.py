@@ -219,3 +219,45 @@ def test_an_attached_first_body_does_not_make_the_mechanism_its_file(tmp_path, r
         lines = result.stderr.strip().splitlines()
         line = 2 if first == "attach" else 3
         assert len(lines) == 1 and f"main.xml:{line}: <attach>" in lines[0], result.stderr
+
+
+WELD = """<mujoco>
+  <worldbody>
+    <body name="upper" pos="0 0 1">
+      <joint name="A" axis="0 1 0"/>
+      <inertial pos="0.2 0 0" mass="1" diaginertia="0.001 0.01 0.01"/>
+      <body name="lower" pos="0.4 0 0">
+        {joint}
+        <inertial pos="0.1 0 -0.1" mass="0.5" diaginertia="0.002 0.003 0.002"/>
+      </body>
+    </body>
+  </worldbody>
+  <equality>{weld}</equality>
+</mujoco>"""
+
+
+@pytest.mark.slow
+def test_weld_holds_the_written_pose_like_a_rigid_body(tmp_path, run):
+    """<weld body1 body2> across a hinge holds it at the written pose: the pendulum swings as
+    the same bodies welded in the tree (no hinge); relpose and torquescale are refused."""
+    out = {}
+    for name, joint, weld in (("weld", '<joint name="B" axis="0 1 0"/>',
+                               '<weld name="W" body1="lower" body2="upper" anchor="0.4 0 0"/>'),
+                              ("rigid", "", "")):
+        (tmp_path / f"{name}.xml").write_text(WELD.format(joint=joint, weld=weld))
+        result = run("simulate", tmp_path / f"{name}.xml", "--duration", "0.4", "--json")
+        assert result.exit_code == 0, result.stderr
+        out[name] = json.loads(result.stdout)
+    assert out["weld"]["diagnostics"]["degrees_of_freedom"] == 1
+    a = out["weld"]["final"]["joints"]["A"]["coordinates"][0]
+    assert abs(a) > 1e-2
+    assert a == pytest.approx(out["rigid"]["final"]["joints"]["A"]["coordinates"][0], abs=1e-9)
+    assert abs(out["weld"]["final"]["joints"]["B"]["coordinates"][0]) < 1e-9
+    for bad, needle in (('relpose="0 0 0 1 0 0 0"', "relpose"),
+                        ('torquescale="0.5"', "torquescale")):
+        (tmp_path / "bad.xml").write_text(WELD.format(
+            joint='<joint name="B" axis="0 1 0"/>',
+            weld=f'<weld body1="lower" body2="upper" {bad}/>'))
+        result = run("simulate", tmp_path / "bad.xml", "--duration", "0")
+        assert result.exit_code == 1 and needle in result.stderr
+        assert len(result.stderr.strip().splitlines()) == 1, result.stderr

@@ -176,7 +176,7 @@ def _build(mech: Mechanism, masses: dict, base: str | None, warnings: list[str],
               for head in heads]
     sys_joints = []
     for j in joints:
-        if j.kind == "fixed" or (j.kind == "free" and not j.loop):
+        if (j.kind in ("fixed", "free")) and not j.loop:  # a loop weld is a cut fixed joint
             continue
         a = WORLD if j.parent == WORLD_LINK else body_of[j.parent]
         b = WORLD if j.child == WORLD_LINK else body_of[j.child]

@@ -40,6 +40,7 @@ from massprops.robot.joints.frames import (
     compose,
     unit_axis,
 )
+from massprops.robot.joints.mjcf_loops import loop_joint
 
 __all__ = ["mjcf_mechanism"]
 
@@ -229,7 +230,7 @@ def mjcf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
         r.walk(top, "main", IDENTITY, WORLD_LINK, IDENTITY)
     for eq in root.findall("equality"):
         for k, node in enumerate(eq.children):
-            r.joints.append(_loop(r, node, k))
+            r.joints.append(loop_joint(r, node, k))
     joints = [j for j in r.joints if j is not None]
     gravity = None
     for option in root.findall("option"):
@@ -244,48 +245,3 @@ def mjcf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
         "springref and range are shifted alike, the motion is MuJoCo's",)
     return Mechanism(path, "mjcf", tuple(joints), r.poses, frozenset(r.floating), gravity,
                      tuple(sorted(r.notes)), remarks)
-
-
-def _loop(r: _Reader, node: Node, k: int) -> RobotJoint | None:
-    v = r.v
-    a = r.defaults.attrs(node, "main")
-    if a.get("active", "true") == "false":
-        return None
-    if node.tag != "connect":
-        raise v.error(node, f"<{node.tag}> equality is not supported as a joint (only "
-                            "<connect body1 body2 anchor>, a spherical loop joint)")
-    if "site1" in a:
-        body1, body2, anchor = _sites(r, node, a)
-    elif "body1" not in a:
-        raise v.error(node, "<connect> needs body1= (and anchor=) or site1= and site2=")
-    else:
-        body1, body2 = a["body1"], a.get("body2", WORLD_LINK)
-        anchor = v.numbers(node, a.get("anchor", "0 0 0"), "anchor=", 3, 'anchor="0 0 0"')
-    for b in (body1, body2):
-        if b != WORLD_LINK and b not in r.poses:
-            raise v.error(node, f"no body named {b!r}; check the spelling")
-    name = a.get("name") or f"connect{k}"
-    return RobotJoint(name, "spherical", body2, body1, (np.eye(3), anchor), np.zeros((0, 3)),
-                      node, loop=True)
-
-
-_SITES_APART = 1e-9  # m: two sites "coincide" as written up to round-off of written numbers
-
-
-def _sites(r: _Reader, node: Node, a: dict):
-    """A site-based connect (MuJoCo 3): (body1, body2, the anchor in body1's frame). The sites
-    must coincide as written: massprops starts from the pose as written, closed."""
-    v = r.v
-    if "site2" not in a:
-        raise v.error(node, "<connect site1=...> needs site2= as well")
-    for s in (a["site1"], a["site2"]):
-        if s not in r.sites:
-            raise v.error(node, f"no site named {s!r}; check the spelling")
-    (body1, p1), (body2, p2) = r.sites[a["site1"]], r.sites[a["site2"]]
-    gap = float(np.linalg.norm(p1 - p2))
-    if gap > _SITES_APART:
-        raise v.error(node, f"sites {a['site1']!r} and {a['site2']!r} are {gap:.6g} m apart as "
-                            "written: massprops starts from the written pose with every loop "
-                            "closed; move a site or a body so that they meet")
-    rot, t = r.poses[body1] if body1 != WORLD_LINK else IDENTITY
-    return body1, body2, rot.T @ (p1 - t)
