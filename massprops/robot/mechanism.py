@@ -46,6 +46,7 @@ def _main_root(model: RobotModel) -> Node:
         root = link.node
         while root.parent is not None:
             root = root.parent
-        if root.file is None or Path(root.file) == Path(model.path):
+        # only MJCF attaches files; a URDF from xacro has the expanded text's name
+        if model.format != "mjcf" or root.file is None or Path(root.file) == Path(model.path):
             return root
     return parse_xml(model.path)[0]
