@@ -261,9 +261,10 @@ def check_mass_matrix(scene) -> None:
         return
     q, _, _, _ = initial_coordinates(scene, tree)
     matrix = mass_matrix(tree, kinematics(tree, q, np.zeros(tree.nv)))
-    values, vectors = np.linalg.eigh(matrix)
+    values = np.linalg.eigvalsh(matrix)  # the vectors only to name the joints of a failure
     if values[0] > _SINGULAR * max(values[-1], 0.0):
         return
+    values, vectors = np.linalg.eigh(matrix)
     weight = np.abs(vectors[:, 0])
     names = [scene.joints[j.source].name if j.source is not None else "the floating base"
              for j in tree.joints if j.nv and weight[j.iu:j.iu + j.nv].max() > 0.1 * weight.max()]
