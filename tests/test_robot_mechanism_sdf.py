@@ -87,7 +87,8 @@ URDF_BASE = """<robot name="r">
     ("r.urdf", URDF_BASE.format(joint='<joint name="j" type="revolute"><parent link="nope"/>'
                                       '<child link="b"/></joint>'), "no link named 'nope'"),
     ("r.urdf", URDF_BASE.format(joint='<joint name="j" type="planar"><parent link="a"/>'
-                                      '<child link="b"/></joint>'), "planar"),
+                                      '<child link="b"/><axis xyz="0 0 0"/></joint>'),
+     "axis is zero"),
     ("r.urdf", URDF_BASE.format(joint='<joint name="j" type="hinge"><parent link="a"/>'
                                       '<child link="b"/></joint>'), "not a URDF joint type"),
     ("r.urdf", URDF_BASE.format(joint='<joint name="j" type="revolute"><parent link="a"/>'

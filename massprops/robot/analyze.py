@@ -151,10 +151,12 @@ def load_model(path: str | os.PathLike, *, source: str = "auto",
     if source not in SOURCES:
         raise UsageError(f"source must be one of {', '.join(SOURCES)}, got {source!r}")
     p = Path(path)
+    said: list[str] = []  # xacro's own warnings, for the model's
     if is_xacro(p):
         if not p.is_file():
             parse_xml(p)  # the reader's own "no such file" / "is a directory" message
-        data = expand_xacro(p, xacro_args, package_paths=[Path(d) for d in package_paths])
+        data = expand_xacro(p, xacro_args, package_paths=[Path(d) for d in package_paths],
+                            notes=said)
         root = parse_xml_bytes(data, f"{p}{EXPANDED}")
     else:
         root, data = parse_xml(p)
@@ -162,7 +164,8 @@ def load_model(path: str | os.PathLike, *, source: str = "auto",
     if root.tag == "robot" and not is_xacro(p) and has_xacro(root):
         # a .urdf still holding xacro (e.g. $(optenv ...) left by a partial expansion): what
         # ROS tools do with it is run xacro, so do that rather than refuse the robot
-        data = expand_xacro(p, xacro_args, package_paths=[Path(d) for d in package_paths])
+        data = expand_xacro(p, xacro_args, package_paths=[Path(d) for d in package_paths],
+                            notes=said)
         root = parse_xml_bytes(data, f"{p}{EXPANDED}")
         note = "the file holds xacro expressions: expanded by xacro first"
     fmt = FORMATS_BY_ROOT.get(root.tag)
@@ -179,7 +182,12 @@ def load_model(path: str | os.PathLike, *, source: str = "auto",
         # deferred: a description loads only its own format's parser
         from massprops.robot.formats.mjcf import parse_mjcf as parse
     model = parse(root, data, p, source=source, package_paths=[Path(d) for d in package_paths])
-    return model if note is None else replace(model, warnings=(note, *model.warnings))
+    if not model.links:
+        said.append("no links: nothing to compute (a file of xacro macros only? give the file "
+                    "that calls them)" if is_xacro(p) else "no links: nothing to compute")
+    if note is None and not said:
+        return model
+    return replace(model, warnings=(*([note] if note else []), *said, *model.warnings))
 
 
 def analyze_model(path: str | os.PathLike, *, source: str = "auto",
@@ -255,7 +263,10 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         if stated is not None and stated.mass > 0:
             masses = [stated.mass * w / sum(weights) for w in weights]
             total = stated.mass
-        elif model.format == "mjcf":
+        elif link.auto_mass is not None:  # SDF auto: the densities' shares of the given mass
+            masses = [link.auto_mass * w / sum(weights) for w in weights]
+            total = link.auto_mass
+        elif model.format == "mjcf" or all(g.density is not None for g in link.geometries):
             masses = weights
         else:
             return skipped(f"no stated mass to keep and no {setting_ref('density')}: give "
@@ -263,7 +274,7 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
                            "(kg/m³)", False)
     computed = combine(parts, masses, total)
     if stated is None:
-        if model.format != "mjcf":  # an MJCF body without one gets MuJoCo's sum over its geoms
+        if model.format != "mjcf" and link.inertial_node is None:  # MJCF, SDF auto: the sum
             warnings.append("no stated inertial: nothing to compare")
         comparison = None
     else:

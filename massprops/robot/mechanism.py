@@ -7,8 +7,10 @@ from (every link's node; MJCF includes already spliced in).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from massprops.robot.formats.values import Values
-from massprops.robot.formats.xmltree import Node
+from massprops.robot.formats.xmltree import Node, parse_xml
 from massprops.robot.joints.frames import Mechanism
 from massprops.robot.joints.urdf import urdf_mechanism
 from massprops.robot.model import RobotModel
@@ -22,9 +24,7 @@ def read_mechanism(model: RobotModel) -> Mechanism:
     if not model.links:
         root_name = {"urdf": "robot", "sdf": "sdf", "mjcf": "mujoco"}.get(model.format, "robot")
         raise Values(model.path).error(Node(root_name, {}, 1, 0, 0), "no links: nothing moves")
-    root = model.links[0].node
-    while root.parent is not None:
-        root = root.parent
+    root = _main_root(model)
     names = [link.name for link in model.links]
     if model.format == "urdf":
         return urdf_mechanism(root, model.path, names)
@@ -35,3 +35,18 @@ def read_mechanism(model: RobotModel) -> Mechanism:
     from massprops.robot.joints.mjcf import mjcf_mechanism  # a description loads its own reader
 
     return mjcf_mechanism(root, model.path, names)
+
+
+def _main_root(model: RobotModel) -> Node:
+    """The root element of the description's own file. A link's node leads up to it, except
+    the bodies an MJCF ``<attach>`` reads from another file (their nodes lead to that file's
+    root: reading it would simulate the attached model alone); with no link of its own the
+    file is read again."""
+    for link in model.links:
+        root = link.node
+        while root.parent is not None:
+            root = root.parent
+        # only MJCF attaches files; a URDF from xacro has the expanded text's name
+        if model.format != "mjcf" or root.file is None or Path(root.file) == Path(model.path):
+            return root
+    return parse_xml(model.path)[0]

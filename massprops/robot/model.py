@@ -80,6 +80,8 @@ class Link:
     inertial_node : the element to replace on write-back (None: insert a new one).
     source : which geometry ``geometries`` is: "collision" or "visual" (with ``--from auto``, a
         link with no collision element falls back to its visual ones).
+    auto_mass : kg, the mass an SDF ``<inertial auto="true">`` scales its collisions to, or None.
+    A link whose every geometry has a ``density`` (MJCF, SDF auto) is computed from them.
     """
 
     name: str
@@ -89,6 +91,7 @@ class Link:
     inertial_node: Node | None = None
     warnings: tuple[str, ...] = ()
     source: str = "collision"
+    auto_mass: float | None = None
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
+from massprops.dynamics.systems.inertials import check_bodies, judged, sdf_defaults
 from massprops.dynamics.systems.model import WORLD, SystemBody, SystemJoint
 from massprops.dynamics.systems.tree import kinematics, mass_matrix
 from massprops.errors import RobotModelError
@@ -64,7 +65,9 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
     path = Path(path)
     masses, warnings = {}, []
     model = load_model(path, package_paths=package_paths)
-    if inertials == "computed" or model.format == "mjcf":
+    auto = {link.name for link in model.links if link.stated is None and link.geometries
+            and all(g.density is not None for g in link.geometries)}  # SDF <inertial auto>
+    if inertials == "computed" or model.format == "mjcf" or auto:
         report = analyze_model(path, package_paths=package_paths)
         model = report.model
         if inertials == "computed" and report.errors:
@@ -76,6 +79,10 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
             if use is not None:
                 masses[r.name] = (use.mass, np.asarray(use.center_of_mass, float),
                                   np.asarray(use.inertia, float))
+            elif r.error and (model.format == "mjcf" or r.name in auto):
+                # the simulator's inertia from geoms that cannot be read: not massless
+                raise RobotModelError(report.errors[[x.name for x in report.links
+                                                     if x.error].index(r.name)])
             elif inertials == "computed" and r.link.geometries:
                 warnings.append(f"link {r.name!r}: no mass ({r.reason})")
     else:
@@ -83,13 +90,20 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
             if link.stated is not None:
                 s = link.stated
                 masses[link.name] = (s.mass, s.center_of_mass, s.inertia)
+    if model.format == "sdf" and inertials == "stated":
+        warnings += sdf_defaults(model, masses)
+    nodes = {link.name: link.node for link in model.links}
+    said, tol = judged(masses, path, nodes)
+    warnings += said
     mech = read_mechanism(model)
     warnings += _said(mech, path)
-    return _build(mech, masses, base, warnings, path)
+    desc = _build(mech, masses, base, warnings, path)
+    check_bodies(desc, tol, nodes)
+    return desc
 
 
 def _said(mech: Mechanism, path: Path) -> list[str]:
-    out = []
+    out = list(mech.remarks)
     if any(j.limits for j in mech.joints):
         named = [j.name for j in mech.joints if j.limits]
         out.append(f"joint limits are not enforced (the systems engine has no limits "
@@ -162,7 +176,7 @@ def _build(mech: Mechanism, masses: dict, base: str | None, warnings: list[str],
               for head in heads]
     sys_joints = []
     for j in joints:
-        if j.kind == "fixed" or (j.kind == "free" and not j.loop):
+        if (j.kind in ("fixed", "free")) and not j.loop:  # a loop weld is a cut fixed joint
             continue
         a = WORLD if j.parent == WORLD_LINK else body_of[j.parent]
         b = WORLD if j.child == WORLD_LINK else body_of[j.child]
@@ -197,7 +211,8 @@ def _lumped(head: str, members: list[str], poses: dict, masses: dict) -> SystemB
         d = c - com
         inertia += jw + m * ((d @ d) * np.eye(3) - np.outer(d, d))
     spread = max((float(np.linalg.norm(poses[n][1] - com)) for n in members), default=0.0)
-    gyration = float(np.sqrt(np.trace(inertia) / (2 * total))) if total > 0 else 0.0
+    # a point mass's inertia may carry -1e-20 round-off (`inertials.judged`): no square root of it
+    gyration = float(np.sqrt(max(np.trace(inertia), 0.0) / (2 * total))) if total > 0 else 0.0
     return SystemBody(head, float(total), rot0.T @ inertia @ rot0, rot0, com,
                       max(2 * spread, 2 * gyration))
 
@@ -246,9 +261,10 @@ def check_mass_matrix(scene) -> None:
         return
     q, _, _, _ = initial_coordinates(scene, tree)
     matrix = mass_matrix(tree, kinematics(tree, q, np.zeros(tree.nv)))
-    values, vectors = np.linalg.eigh(matrix)
+    values = np.linalg.eigvalsh(matrix)  # the vectors only to name the joints of a failure
     if values[0] > _SINGULAR * max(values[-1], 0.0):
         return
+    values, vectors = np.linalg.eigh(matrix)
     weight = np.abs(vectors[:, 0])
     names = [scene.joints[j.source].name if j.source is not None else "the floating base"
              for j in tree.joints if j.nv and weight[j.iu:j.iu + j.nv].max() > 0.1 * weight.max()]

@@ -337,6 +337,9 @@ class _Walker:
             if mesh["inertia"] == "shell":
                 mesh["problem"] = (f"<mesh name={name!r} inertia=\"shell\">: a hollow shell is "
                                    "not supported; massprops integrates solids")
+            elif mesh["inertia"] != "exact" and mesh["faces"] is None and \
+                    mesh["vertices"] is not None:
+                pass  # points only: the mesh is their hull, for MuJoCo and massprops alike
             elif mesh["inertia"] != "exact":
                 warning = (f"mesh {name!r}: MuJoCo's mesh inertia {mesh['inertia']!r} integrates "
                            "the convex hull; massprops the mesh itself (add inertia=\"exact\" "
@@ -416,14 +419,17 @@ def _meshes(root: Node, defaults: _Defaults, compiler: _Compiler, v: Values, pat
                 else np.ones(3)
             entry = {"uri": file, "scale": scale, "path": None, "problem": None,
                      "vertices": None, "faces": None, "inertia": a.get("inertia", "legacy")}
-            if "vertex" in a and "face" in a:
-                counts = [len(a[k].split()) for k in ("vertex", "face")]
-                if counts[0] % 3 or counts[1] % 3:
+            if "vertex" in a:
+                counts = [len(a[k].split()) for k in ("vertex", "face") if k in a]
+                if any(c % 3 for c in counts):
                     raise v.error(node, "vertex= and face= need 3 numbers per vertex and face")
                 entry["vertices"] = v.numbers(node, a["vertex"], "vertex=", counts[0],
                                               'vertex="0 0 0 1 0 0 0 1 0 0 0 1"').reshape(-1, 3)
-                entry["faces"] = v.numbers(node, a["face"], "face=", counts[1],
-                                           'face="0 2 1 0 1 3"').astype(np.int64).reshape(-1, 3)
+                if "face" in a:
+                    entry["faces"] = v.numbers(node, a["face"], "face=", counts[1],
+                                               'face="0 2 1 0 1 3"').astype(np.int64).reshape(
+                                                   -1, 3)
+                # else MuJoCo makes the convex hull of the points (`combine.MeshCache`)
                 entry["uri"] = f"<mesh name={name!r}> (line {node.line})"
             elif file:
                 ref = Path(file).name if compiler.strippath else file
@@ -432,8 +438,8 @@ def _meshes(root: Node, defaults: _Defaults, compiler: _Compiler, v: Values, pat
                 if entry["problem"] is None and entry["path"].suffix.lower() == ".msh":
                     read_msh(entry)
             else:
-                entry["problem"] = (f"<mesh name={name!r}> (line {node.line}) has no file= "
-                                    "(a vertex-only mesh is MuJoCo's convex hull: not supported)")
+                entry["problem"] = (f"<mesh name={name!r}> (line {node.line}) has neither file= "
+                                    "nor vertex=; give one")
             for legacy in ("refpos", "refquat"):
                 if legacy in a:
                     entry["problem"] = f"<mesh {legacy}=> (line {node.line}) is not supported"

@@ -18,6 +18,7 @@ warning.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -60,12 +61,21 @@ def parse_sdf(root: Node, data: bytes, path: Path, *, source: str = "collision",
             stated = _stated(inertial, v, warnings) if inertial is not None else None
             geoms = []
             used = pick_source(source, node.findall("collision"), node.findall("visual"))
+            auto = inertial is not None and _is_auto(inertial)
+            if auto:  # the simulator integrates the collisions: their density, and the mass
+                used = "collision"
             for element in node.findall(used):
                 geom = _geometry(element, name, frames, v, path, package_paths, warnings)
+                if geom is not None and auto:
+                    geom = replace(geom, density=_density(element, inertial, v))
                 if geom is not None:
                     geoms.append(geom)
+            mass = None
+            if auto and inertial.find("mass") is not None:
+                mass = v.positive(inertial.find("mass"), "<mass>", float(
+                    v.text(inertial.find("mass"), 1, "<mass>1.5</mass>")[0]))
             links.append(Link(prefix + name, node, stated, tuple(geoms), inertial,
-                              tuple(warnings), source=used))
+                              tuple(warnings), source=used, auto_mass=mass))
     return RobotModel(path, "sdf", tuple(links), data)
 
 
@@ -159,10 +169,27 @@ class _FrameGraph:
         return _compose(_inverse(self.in_model(link)), _compose(frame, local))
 
 
+_DENSITY = 1000.0  # kg/m³: sdformat's Collision::DensityDefault (water)
+
+
+def _is_auto(inertial: Node) -> bool:
+    return inertial.attrs.get("auto", "false").strip().lower() in ("true", "1")
+
+
+def _density(collision: Node, inertial: Node, v: Values) -> float:
+    """SDF 1.11 auto inertial: the collision's ``<density>``, else the inertial's, else 1000."""
+    for node in (collision, inertial):
+        el = node.find("density")
+        if el is not None:
+            return v.positive(el, "<density>", float(v.text(el, 1, "<density>1000</density>")[0]))
+    return _DENSITY
+
+
 def _stated(node: Node, v: Values, warnings: list[str]) -> StatedInertial | None:
-    if node.attrs.get("auto", "false").strip().lower() in ("true", "1"):
+    if _is_auto(node):
         warnings.append("<inertial auto=\"true\">: the simulator computes it from the "
-                        "collisions; nothing stated to compare")
+                        "collisions (their <density>, default 1000 kg/m³, scaled to <mass> when "
+                        "given), and so does massprops; nothing stated to compare")
         return None
     (rotation, xyz), relative_to = pose_of(node, v)
     if relative_to:
@@ -216,6 +243,10 @@ def _geometry(element: Node, link: str, frames: _FrameGraph, v: Values, path: Pa
         return Geometry("sphere", dims=(length("radius"),), **common)
     if tag in ("cylinder", "capsule"):
         return Geometry(tag, dims=(length("radius"), length("length")), **common)
+    if tag == "cone":  # 1.11: frame at mid-height (sdformat's Cone), the solid's at its COM
+        radius, height = length("radius"), length("length")
+        common["translation"] = xyz + rotation @ np.array([0.0, 0.0, -height / 4])
+        return Geometry("cone", dims=(radius, height), **common)
     if tag == "ellipsoid":
         radii = v.child_text(shape, "radii", 3, example="<radii>0.1 0.2 0.3</radii>")
         if radii is None:
@@ -238,5 +269,6 @@ def _geometry(element: Node, link: str, frames: _FrameGraph, v: Values, path: Pa
         warnings.append(f"<{tag}> (line {shape.line}) has no finite volume; ignored")
         return None
     return Geometry(tag, problem=f"<{tag}> geometry (line {shape.line}) is not supported; use "
-                                 "box, cylinder, sphere, capsule, ellipsoid or mesh", **common)
+                                 "box, cylinder, sphere, capsule, ellipsoid, cone or mesh",
+                    **common)
 

@@ -10,6 +10,8 @@ the expanded text, which is why the parsed nodes carry the name ``FILE (expanded
 from __future__ import annotations
 
 import contextlib
+import io
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -34,9 +36,11 @@ def has_xacro(root) -> bool:
 
 
 def expand_xacro(path: Path, args: Mapping[str, str] | None = None,
-                 package_paths: Sequence[Path] = ()) -> bytes:
+                 package_paths: Sequence[Path] = (), notes: list | None = None) -> bytes:
     """The URDF that xacro makes of ``path`` with ``args``, as UTF-8 bytes.
 
+    xacro prints its warnings to stderr (a library never prints): they are captured and each
+    one goes to ``notes`` as ``xacro: ...`` (its "when processing file" trail dropped).
     Raises MassPropsError (exit 1) with the install hint when xacro is missing, RobotModelError
     naming the file when xacro refuses it.
     """
@@ -46,7 +50,9 @@ def expand_xacro(path: Path, args: Mapping[str, str] | None = None,
     except ImportError as exc:
         raise MassPropsError(f"{path}: reading .xacro needs the xacro package: pip install "
                              "xacro") from exc
-    with _find_packages(substitution, path, package_paths):
+    printed = io.StringIO()
+    with _find_packages(substitution, path, package_paths), \
+            contextlib.redirect_stderr(printed), contextlib.redirect_stdout(printed):
         try:
             doc = xacro.process_file(str(path), mappings=dict(args or {}))
         except Exception as exc:  # xacro raises XacroException, its own and the XML parser's
@@ -54,7 +60,16 @@ def expand_xacro(path: Path, args: Mapping[str, str] | None = None,
             raise RobotModelError(f"{path}: xacro failed: {text}; fix the file or give the "
                                   f"missing argument with {setting_ref('xacro_arg')} "
                                   "NAME:=VALUE") from exc
+    if notes is not None:
+        for line in _ANSI.sub("", printed.getvalue()).splitlines():
+            line = line.strip()
+            if line and not line.startswith(("when processing file", "in file:",
+                                             "when instantiating", "instantiated from")):
+                notes.append(f"xacro: {line.removeprefix('warning: ')}")
     return doc.toprettyxml(indent="  ", encoding="utf-8")
+
+
+_ANSI = re.compile(r"\x1b\[[0-9;]*m")  # xacro colours its warnings
 
 
 @contextlib.contextmanager

@@ -88,7 +88,11 @@ class MeshCache:
         return self._store[key]
 
     def _load(self, geom: Geometry):
-        if geom.vertices is not None:
+        if geom.vertices is not None and geom.faces is None:
+            # MJCF vertex= without face=: MuJoCo's mesh is the convex hull of the points
+            mesh = convex_hull(Mesh(np.ascontiguousarray(geom.vertices, dtype=np.float64),
+                                    np.zeros((0, 3), dtype=np.int64), name=geom.uri))
+        elif geom.vertices is not None:
             mesh = Mesh(np.ascontiguousarray(geom.vertices, dtype=np.float64),
                         np.ascontiguousarray(geom.faces, dtype=np.int64), name=geom.uri)
         else:
@@ -162,8 +166,8 @@ def convex_hull(mesh: Mesh) -> Mesh:
     try:
         hull = ConvexHull(mesh.vertices)
     except Exception as exc:  # Qhull's error for flat or degenerate point sets
-        raise DegenerateMeshError(f"{mesh.name}: not closed, and its points span no volume "
-                                  "(no convex hull)") from exc
+        raise DegenerateMeshError(f"{mesh.name}: its points span no volume (no convex "
+                                  "hull)") from exc
     faces = hull.simplices.astype(np.int64)
     v = mesh.vertices
     normal = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])

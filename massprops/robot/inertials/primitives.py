@@ -1,7 +1,7 @@
 """Exact mass properties of the primitive solids of robot descriptions, per unit density.
 
-Each solid sits in its own frame with its centre of mass at the origin; cylinder and capsule
-have their axis along z. Returned inertias are J = -∫ s̃ s̃ dV (m⁵: multiply by the density in
+Each solid sits in its own frame with its centre of mass at the origin; cylinder, capsule and
+cone have their axis along z. Returned inertias are J = -∫ s̃ s̃ dV (m⁵: multiply by the density in
 kg/m³ for kg·m²) about the centre of mass, in the primitive's axes: J_xx = ∫(y² + z²) dV,
 J_xy = -∫ x y dV (zero here, every primitive is symmetric about its own axes).
 
@@ -17,14 +17,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Solid", "box", "capsule", "cylinder", "ellipsoid", "sphere", "PRIMITIVES"]
+__all__ = ["Solid", "box", "capsule", "cone", "cylinder", "ellipsoid", "sphere", "PRIMITIVES"]
 
 
 @dataclass(frozen=True, eq=False)
 class Solid:
     """A primitive solid of unit density about its centre of mass.
 
-    kind : "box", "sphere", "cylinder", "capsule" or "ellipsoid".
+    kind : "box", "sphere", "cylinder", "capsule", "ellipsoid" or "cone".
     dims : (k,) float, m, the arguments it was made from (see each constructor).
     volume : m³. inertia : (3, 3) float, m⁵ (kg·m² per kg/m³), about the centre, own axes.
     """
@@ -47,6 +47,8 @@ class Solid:
             return np.sqrt((r * r) @ (np.asarray(d) ** 2))
         axis = np.abs(r[:, 2])            # the z axis in target coordinates
         radius, half = d[0], d[1] / 2
+        if self.kind == "cone":           # from the centre: the apex 3L/4 away, the base L/4
+            return axis * 1.5 * half + radius * np.sqrt(np.maximum(0.0, 1.0 - axis * axis))
         if self.kind == "cylinder":       # a disc of radius r spans r·sqrt(1 - a_i²) on axis i
             return axis * half + radius * np.sqrt(np.maximum(0.0, 1.0 - axis * axis))
         return axis * half + radius       # capsule: the segment swept by a ball
@@ -120,6 +122,18 @@ def capsule(radius: float, length: float) -> Solid:
                  _diagonal(jxx, jxx, vc * r2 / 2 + 2 * vh * r2 / 5))
 
 
+def cone(radius: float, length: float) -> Solid:
+    """A solid right circular cone along z (apex towards +z) about its centre of mass, which is
+    ``length``/4 above the base: base ``radius``, height ``length`` (m). V = πr²L/3,
+    J_zz = 3 V r² / 10, J_xx = J_yy = 3 V (r²/20 + L²/80) (about the centre of mass; the parser
+    shifts a format's cone frame onto it: SDF's frame is at mid-height, sdformat's Cone)."""
+    _positive("cone", radius=radius, length=length)
+    r2 = radius**2
+    v = math.pi * r2 * length / 3
+    jxx = 3 * v * (r2 / 20 + length**2 / 80)
+    return Solid("cone", (radius, length), v, _diagonal(jxx, jxx, 3 * v * r2 / 10))
+
+
 PRIMITIVES = {"box": box, "sphere": sphere, "ellipsoid": ellipsoid, "cylinder": cylinder,
-              "capsule": capsule}
+              "capsule": capsule, "cone": cone}
 """kind -> constructor, each taking the dims of ``Solid.dims`` in order."""

@@ -17,7 +17,7 @@ the element.
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +25,8 @@ import numpy as np
 from massprops.robot.formats.values import Values
 from massprops.robot.formats.xmltree import Node
 
-__all__ = ["KINDS", "WORLD_LINK", "Mechanism", "RobotJoint", "compose", "poses_from_tree"]
+__all__ = ["KINDS", "WORLD_LINK", "Mechanism", "RobotJoint", "compose", "mark_loops",
+           "poses_from_tree"]
 
 Pose = tuple[np.ndarray, np.ndarray]
 WORLD_LINK = "world"
@@ -73,7 +74,8 @@ class Mechanism:
     floating : links that the description itself sets free (an MJCF ``<freejoint>``, a URDF
     ``floating`` joint). gravity : (3,) m/s² the description states (MJCF ``<option
     gravity>``), else None. notes : what the description holds that a simulation ignores
-    (friction, armature, actuators), one phrase each.
+    (friction, armature, actuators), one phrase each. remarks : how a number here differs from
+    the format's own (MJCF ``ref``), one warning line each.
     """
 
     path: Path
@@ -83,6 +85,7 @@ class Mechanism:
     floating: frozenset = frozenset()
     gravity: np.ndarray | None = None
     notes: tuple[str, ...] = field(default=())
+    remarks: tuple[str, ...] = field(default=())
 
 
 def compose(a: Pose, b: Pose) -> Pose:
@@ -116,3 +119,34 @@ def poses_from_tree(joints, roots: list[str]) -> dict:
             poses[child] = compose(poses[link], origin)
             todo.append(child)
     return poses
+
+
+def mark_loops(joints: list[RobotJoint], links: list[str]) -> list[RobotJoint]:
+    """The joints with every joint that closes a kinematic loop marked ``loop`` (a format that
+    allows a link to be the child of several joints: SDF's closed chains, e.g. a leg's push rods).
+
+    A spanning tree grows breadth-first from the roots (the world and every link no joint
+    carries), over the joints in file order, parent to child; a joint whose child the tree has
+    reached already closes a loop. A ring of links that no root reaches is entered at its first
+    link in file order, which then counts as a root (its carrier closes the ring).
+    """
+    out = list(joints)
+    children: dict[str, list[int]] = {}
+    for k, j in enumerate(out):
+        if not j.loop:
+            children.setdefault(j.parent, []).append(k)
+    carried = {j.child for j in out if not j.loop}
+    reached = set()
+    for start in [WORLD_LINK, *[n for n in links if n not in carried], *links]:
+        if start in reached:
+            continue
+        reached.add(start)
+        todo = deque([start])
+        while todo:
+            for k in children.get(todo.popleft(), ()):
+                if out[k].child in reached:
+                    out[k] = replace(out[k], loop=True)
+                else:
+                    reached.add(out[k].child)
+                    todo.append(out[k].child)
+    return out

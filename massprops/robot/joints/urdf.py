@@ -26,28 +26,28 @@ _URDF_KINDS = {"revolute": "revolute", "continuous": "revolute", "prismatic": "p
 def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
     """URDF ``<joint name type>`` with ``<parent link>``, ``<child link>``, ``<origin xyz rpy>``
     (the child link frame in the parent link frame), ``<axis xyz>`` (joint frame; default
-    1 0 0, the specification's), ``<limit lower upper>`` and ``<dynamics damping friction>``."""
+    1 0 0, the specification's), ``<limit lower upper>`` and ``<dynamics damping friction>``;
+    ``planar`` is two shifts and a turn through massless stages (`_planar`).
+    A ``<mimic>`` coupling is not a constraint here: said in the notes (Gazebo classic and
+    Pinocchio's default reader leave it out too), never silently dropped."""
     v = Values(path)
-    joints, tree, notes = [], [], set()
+    joints, tree, notes, mimics = [], [], set(), []
     for node in root.findall("joint"):
         name = node.attrs.get("name")
         if not name:
             raise v.error(node, 'a joint needs a name="..."')
         written = node.attrs.get("type", "")
-        if written == "planar":
-            raise v.error(node, f"joint {name!r}: type planar (two shifts and a turn) is not "
-                                "supported by the systems engine")
-        if written not in _URDF_KINDS:
+        if written not in (*_URDF_KINDS, "planar"):
             raise v.error(node, f"joint {name!r}: type {written!r} is not a URDF joint type; "
-                                f"use one of {', '.join(_URDF_KINDS)}")
-        kind = _URDF_KINDS[written]
+                                f"use one of {', '.join(_URDF_KINDS)}, planar")
+        kind = _URDF_KINDS.get(written, "planar")
         parent = node.find("parent").attrs["link"]  # parse_urdf checked both ends
         child = node.find("child").attrs["link"]
         origin = node.find("origin")
         pose = IDENTITY if origin is None else (
             rpy_matrix(*v.attr(origin, "rpy", 3, [0, 0, 0])), v.attr(origin, "xyz", 3, [0, 0, 0]))
         axes = np.zeros((0, 3))
-        if kind in ("revolute", "prismatic"):
+        if kind in ("revolute", "prismatic", "planar"):
             axis = node.find("axis")
             xyz = np.array([1.0, 0.0, 0.0]) if axis is None else v.attr(
                 axis, "xyz", 3, [1, 0, 0])
@@ -62,6 +62,12 @@ def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
             damping = v.positive(dyn, "damping", v.number(dyn, "damping", 0.0), allow_zero=True)
             if v.number(dyn, "friction", 0.0):
                 notes.add("joint friction")
+        mimic = node.find("mimic")
+        if mimic is not None:  # a coupling the engine has no constraint for: said, not hidden
+            mimics.append(f"{name} follows {mimic.attrs.get('joint', '?')}")
+        if kind == "planar":
+            _planar(name, parent, child, pose, axes[0], node, joints, tree)
+            continue
         joints.append(RobotJoint(name, kind, parent, child, IDENTITY, axes, node, limits,
                                  damping))
         tree.append((parent, child, pose))
@@ -69,6 +75,31 @@ def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
     roots = [name for name in links if name not in children]
     poses = poses_from_tree(tree, roots)
     floating = frozenset(j.child for j in joints if j.kind == "free")
+    if mimics:
+        notes.add(f"<mimic> couplings, not enforced: each joint moves on its own "
+                  f"({', '.join(mimics[:4])}{' ...' if len(mimics) > 4 else ''})")
     if root.find("transmission") is not None:
         notes.add("transmissions (actuators)")
     return Mechanism(path, "urdf", tuple(joints), poses, floating, None, tuple(sorted(notes)))
+
+
+def _planar(name: str, parent: str, child: str, pose, normal: np.ndarray, node: Node,
+            joints: list, tree: list) -> None:
+    """A planar joint (URDF: the child moves in the plane normal to ``axis``) as three joints
+    through two massless stages on the child's frame: ``name.x`` and ``name.y`` shift along
+    e1, e2 (in the plane: e1 = the unit axis × z, or × x when the axis is along z, turned to
+    a right-handed e1, e2, axis), then ``name`` turns about the axis. A stage's pose is the
+    child's at the zero pose."""
+    helper = np.array([0.0, 0.0, 1.0]) if abs(normal[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    e2 = np.cross(normal, helper)
+    e2 /= np.linalg.norm(e2)
+    e1 = np.cross(e2, normal)
+    stages = [f"{child}.{name}.x", f"{child}.{name}.y", child]
+    names = [f"{name}.x", f"{name}.y", name]
+    kinds = ["prismatic", "prismatic", "revolute"]
+    upper = parent
+    for k, (stage, axis) in enumerate(zip(stages, (e1, e2, normal))):
+        joints.append(RobotJoint(names[k], kinds[k], upper, stage, IDENTITY, axis[None, :],
+                                 node))
+        tree.append((upper, stage, pose if k == 0 else IDENTITY))
+        upper = stage
