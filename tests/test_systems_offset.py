@@ -103,3 +103,29 @@ def test_gravity_moves_a_floating_system_as_a_whole():
                   - a.velocity).max() < 1e-12
     assert falling.diagnostics["energy_rel_drift"] < 1e-11
     assert abs(b.energy[-1] - b.energy[0]) < 1e-10 * abs(b.energy).max()
+
+
+def test_the_mass_matrix_is_factored_by_subtree():
+    """M is block diagonal over the subtrees that hang from the world (a rate moves only its
+    own subtree): `MassFactor` factors the blocks (a forest of free bodies: 6 × 6 each) and
+    solves as the dense matrix does."""
+    from massprops.dynamics.systems import tree as tr
+    from massprops.dynamics.systems.run import prepare
+    from massprops.dynamics.systems.system import MassFactor
+
+    box = "inertia: [[0.01, 0, 0], [0, 0.02, 0], [0, 0, 0.025]]"
+    more = (f"  third: {{mass: 0.5, {box}, position: [2, 0, 0]}}\n"
+            f"  fourth: {{mass: 0.7, {box}, position: [3, 0, -0.5]}}\njoints:\n"
+            "  - {name: hinge, type: revolute, bodies: [world, fourth], point: [3, 0, 0], "
+            "axis: [0, 1, 0]}\n")
+    text = FLOATING.format(v=1.0, g=-9.81).replace("joints:\n", more)
+    system, y0, _ = prepare(parse_system(text, source="forest.yaml", base_dir=SAMPLES))
+    assert sorted(len(b) for b in system.blocks) == [1, 6, 7]  # hinge; third; upper + elbow
+    assert sorted(np.concatenate(system.blocks).tolist()) == list(range(system.nv))
+    kin = tr.kinematics(system.tree, y0[:system.nq], y0[system.nq:])
+    mass = tr.mass_matrix(system.tree, kin)
+    factor = MassFactor(mass, system.blocks)
+    rhs = np.random.default_rng(3).standard_normal((system.nv, 2))
+    assert np.allclose(factor.solve(rhs), np.linalg.solve(mass, rhs), rtol=1e-12, atol=0)
+    s_inv = factor.lower(np.eye(system.nv))
+    assert np.allclose(s_inv.T @ s_inv, np.linalg.inv(mass), rtol=1e-12, atol=1e-14)

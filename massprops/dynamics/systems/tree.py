@@ -59,6 +59,10 @@ class TreeJoint:
         return NV[self.kind]
 
 
+EYE3 = np.eye(3)
+EYE3.setflags(write=False)  # shared: a 300-body forest's outputs called np.eye half a million times
+
+
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a × b of two 3-vectors (np.cross costs ~30 µs of axis handling per call)."""
     a0, a1, a2 = a[0], a[1], a[2]
@@ -73,7 +77,7 @@ def skew(v: np.ndarray) -> np.ndarray:
 def rot(axis: np.ndarray, angle: float) -> np.ndarray:
     """Rotation matrix about the unit ``axis`` by ``angle`` rad (Rodrigues)."""
     k = skew(axis)
-    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+    return EYE3 + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
 
 
 def quat_matrix(q: np.ndarray) -> np.ndarray:
@@ -120,7 +124,7 @@ def spatial_inertia(mass: float, inertia_world: np.ndarray, com: np.ndarray) -> 
     out[:3, :3] = inertia_world - mass * (c @ c)
     out[:3, 3:] = mass * c
     out[3:, :3] = -mass * c
-    out[3:, 3:] = mass * np.eye(3)
+    out[3:, 3:] = mass * EYE3
     return out
 
 
@@ -167,15 +171,15 @@ def kinematics(tree, q: np.ndarray, u: np.ndarray, udot: np.ndarray | None = Non
         body = tree.bodies[j.child]
         qj, uj = q[j.iq:j.iq + j.nq], u[j.iu:j.iu + j.nv]
         if j.parent == WORLD:
-            rp, cp, vp, ap = np.eye(3), np.zeros(3), np.zeros(6), np.zeros(6)
+            rp, cp, vp, ap = EYE3, np.zeros(3), np.zeros(6), np.zeros(6)
         else:
             rp, cp, vp, ap = rotation[j.parent], com[j.parent], V[j.parent], A[j.parent]
         if j.kind == "free":
             r = quat_matrix(qj[3:7]) @ body.rotation0
             c = body.com0 + qj[0:3]
             s = np.zeros((6, 6))
-            s[3:, 0:3] = np.eye(3)
-            s[0:3, 3:6] = np.eye(3)
+            s[3:, 0:3] = EYE3
+            s[0:3, 3:6] = EYE3
             s[3:, 3:6] = skew(c)
             p = c
             bias = np.concatenate([np.zeros(3), cross(uj[0:3], uj[3:6])])
