@@ -249,7 +249,7 @@ def accelerations(pp, wp, t, q, u, udot, rank0):
     (≥ 0). Gauss' principle in z = Lᵀ u̇: z₀ = L⁻¹ (τ − h), the constraint B z = −Φ̈(u̇ = 0)
     on the independent rows, z = Q [R₁₁⁻ᵀ c_s; (Qᵀ z₀) below the rank] (the least change of z₀,
     i.e. of kinetic energy), u̇ = L⁻ᵀ z. The multipliers are not formed here: the reactions
-    are an output's work (`System.reactions`, their minimum-norm choice)."""
+    are an output's work (`dynamics.systems.outputs`, their minimum-norm choice)."""
     kinematics(pp, q, u, wp)
     applied(pp, t, q, u, wp)
     g = at(wp, 23)

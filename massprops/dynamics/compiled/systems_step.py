@@ -45,7 +45,7 @@ def workspace(prog):
             np.zeros(m), np.zeros((m, 6)), np.zeros((m, 6)), np.zeros((m, nv)),  # 20-23
             np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((m, nv)), np.zeros((p, p)),  # 24-27
             np.zeros((p, p)), np.zeros(p), np.zeros(1 + p, dtype=np.int64),  # 28-30
-            np.zeros((m, kk)), np.zeros((nv, kk)), np.zeros(nv), np.zeros(m),  # 31-34
+            np.zeros((m, kk)), np.zeros((nv, kk)), np.zeros(nv), np.zeros(0),  # 31-34 (34: unused)
             np.zeros(nv), np.zeros(m), np.zeros(max(nq, nv)), np.zeros(nq + nv),  # 35-38
             np.zeros(1 + p, dtype=np.int64), np.zeros(p))  # 39-40
 
