@@ -342,13 +342,21 @@ def test_rate_and_moment_scaling(scale):
        t1=st.floats(-30.0, 30.0), t2=st.floats(-30.0, 30.0))
 def test_flow_property(moments, omega0, t1, t2):
     """Going t1 then t2 equals going t1 + t2 (the flow is a one-parameter group), and the
-    stepping function is the same map."""
+    stepping function is the same map: to round-off times the motion's own amplification of a
+    round-off in the state at t1 (near the separatrix, spin about the intermediate axis, the
+    flow amplifies it exponentially: hypothesis found 7e-12 at |ω| t = 36 against a
+    linear-growth bound of 3.7e-12), measured by moving that state by a relative 1e-7."""
     q1, w1 = free_rotation(moments, Q0, omega0, t1)
     q2, w2 = free_rotation_step(moments, q1, w1, t2)
     q12, w12 = free_rotation(moments, Q0, omega0, t1 + t2)
+    nudge = 1e-7
+    qn, wn = free_rotation_step(moments, q1, w1 * (1.0 + nudge), t2)
+    gain = max(np.max(np.abs(wn - w2)) / (nudge * np.linalg.norm(w1) or 1.0),
+               rotation_angle_between(qn, q2) / nudge)
     scale = 1.0 + np.linalg.norm(omega0) * (abs(t1) + abs(t2))
-    assert np.max(np.abs(w2 - w12)) <= 1e-13 * scale
-    assert rotation_angle_between(q2, q12) <= 1e-13 * scale
+    bound = 1e-13 * scale + 64 * EPS * gain * max(1.0, np.linalg.norm(omega0))
+    assert np.max(np.abs(w2 - w12)) <= bound
+    assert rotation_angle_between(q2, q12) <= bound
 
 
 def test_free_translation_is_ballistic():
