@@ -300,8 +300,12 @@ def _forces(field: Field | None) -> tuple[ForceTerm, ...]:
     return tuple(_force(field.child(node, i)) for i, node in enumerate(field.node.value))
 
 
+TIME_KEYS = ("duration", "integrator", "rtol", "step")
+"""The keys of a scene's ``time:`` (one body and systems alike)."""
+
+
 def _time(field: Field, known_integrators: Sequence[str]) -> TimeSettings:
-    fields = read_mapping(field, ("duration", "integrator", "rtol", "step"),
+    fields = read_mapping(field, TIME_KEYS,
                           {"duration": "duration: 10.0 (seconds)"})
     values: dict[str, object] = {"duration": read_positive(fields["duration"])}
     if "integrator" in fields:

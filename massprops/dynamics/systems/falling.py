@@ -38,19 +38,19 @@ __all__ = ["Falling", "falling_frame"]
 @dataclass(frozen=True, eq=False)
 class Falling:
     """velocity V0 (3,) m/s and gravity g (3,) m/s², world axes; masses (b,) kg of the bodies;
-    free: (iq, iu) of each free joint (the system's roots), whose translation coordinates are
-    their body's centre of mass and its velocity."""
+    free: the first rate index of each free joint (the system's roots), whose first three rates
+    are their body's centre-of-mass velocity."""
 
     velocity: np.ndarray
     gravity: np.ndarray
     masses: np.ndarray
-    free: tuple[tuple[int, int], ...]
+    free: tuple[int, ...]
 
     def start(self, y0: np.ndarray, nq: int) -> np.ndarray:
         """The start state ``y0`` (nq + nv,) in the falling frame: every root's velocity less
         V0 (the joints' rates are relative: every body's velocity loses V0)."""
         y = np.array(y0, dtype=float)
-        for _, iu in self.free:
+        for iu in self.free:
             y[nq + iu:nq + iu + 3] -= self.velocity
         return y
 
@@ -93,5 +93,5 @@ def falling_frame(scene: SystemScene, tree: Tree, y0: np.ndarray) -> Falling | N
     gravity = np.array(scene.gravity, dtype=float)
     if not (v0.any() or gravity.any()):
         return None
-    free = tuple((j.iq, j.iu) for j in tree.joints if j.kind == "free")
+    free = tuple(j.iu for j in tree.joints if j.kind == "free")
     return Falling(v0, gravity, masses, free)

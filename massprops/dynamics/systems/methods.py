@@ -63,6 +63,14 @@ def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
     return name, float(h), reason or REASONS[name]
 
 
+def kind_of(name: str) -> str:
+    """Method ``name``'s kind in the registry (``adaptive``, ``fixed``): which setting it takes."""
+    # deferred: the registry imports the one-body kernels' modules (their records only here)
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    return INTEGRATORS[name].kind
+
+
 def is_stiff(name: str) -> bool:
     """Method ``name`` is stable far beyond the explicit step limit (the registry's ``stiff``):
     its default step ignores the fast rates."""

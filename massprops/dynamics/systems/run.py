@@ -23,6 +23,7 @@ from massprops.dynamics.systems.methods import (
     SYSTEM_INTEGRATORS,
     choose,
     error_estimate,
+    kind_of,
 )
 from massprops.dynamics.systems.model import SystemScene
 from massprops.dynamics.systems.outputs import Samples, evaluate
@@ -215,9 +216,9 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
         diagnostics["error_estimate"] = error_estimate(system, y0, t_out, name, setting, floors,
                                                        _windows(scene), samples, 2 * limit,
                                                        run.steps)
-        note = estimate_note(scene.source, diagnostics["error_estimate"], name,
-                             "adaptive" if name == "dop853" else "fixed")
-        notes += [] if note is None else [note]
+        note = estimate_note(scene.source, diagnostics["error_estimate"], name, kind_of(name))
+        if note is not None:
+            notes.append(note)
     held = _holding(system, run.y_out[-1], notes)
     return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics, scene,
                         tuple(notes), held, name, reason)

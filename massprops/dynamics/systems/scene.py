@@ -18,6 +18,7 @@ import yaml
 
 from massprops.dynamics.model import RigidBody, TimeSettings
 from massprops.dynamics.scene import (
+    TIME_KEYS,
     _body_spec,
     _mesh_body,
     _mesh_files,
@@ -126,7 +127,7 @@ def system_time(field: Field) -> TimeSettings:
 
     time = _time(field, integrator_names())
     if time.integrator not in SYSTEM_INTEGRATORS:
-        named = read_mapping(field, ("duration", "integrator", "rtol", "step"))["integrator"]
+        named = read_mapping(field, TIME_KEYS)["integrator"]
         raise named.error(f"{time.integrator} steps one body's state only; a system runs with "
                           f"{', '.join(SYSTEM_INTEGRATORS)}")
     return time
