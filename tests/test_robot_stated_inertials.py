@@ -69,9 +69,10 @@ def test_mjcf_body_with_unreadable_geoms_names_the_geom_not_a_singular_matrix(tm
         result.stderr
 
 
-def test_mimic_couplings_are_said_not_dropped(tmp_path, run):
-    """URDF <mimic> and SDF 1.11 <axis><mimic>: the engine has no coupling constraint; the run
-    goes on with each joint free, and the warning names the coupled joint."""
+def test_mimic_couplings_are_enforced(tmp_path, run):
+    """URDF <mimic> and SDF 1.11 <axis><mimic> are constraints (tests/test_systems_couplings.py
+    checks the dynamics): after a run under gravity the follower still sits at multiplier ×
+    the leader's coordinate (+ offset), and no warning says otherwise."""
     link = ('<link name="{n}"><inertial><origin xyz="0.1 0 0"/><mass value="1"/><inertia '
             'ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>')
     (tmp_path / "m.urdf").write_text(
@@ -79,22 +80,24 @@ def test_mimic_couplings_are_said_not_dropped(tmp_path, run):
         + '<joint name="ja" type="continuous"><parent link="base"/><child link="a"/>'
         '<axis xyz="0 1 0"/></joint><joint name="jb" type="prismatic"><parent link="base"/>'
         '<child link="b"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" '
-        'velocity="1"/><mimic joint="ja" multiplier="0.1"/></joint></robot>')
-    result = run("simulate", tmp_path / "m.urdf", "--duration", "0")
-    assert result.exit_code == 0, result.stderr
-    assert "mimic" in result.stderr and "jb follows ja" in result.stderr
-    inertial = ('<inertial><mass>1</mass><inertia><ixx>0.01</ixx><iyy>0.01</iyy><izz>0.01</izz>'
-                '</inertia></inertial>')
+        'velocity="1"/><mimic joint="ja" multiplier="0.1" offset="0.05"/></joint></robot>')
+    inertial = ('<inertial><pose>0.1 0 0 0 0 0</pose><mass>1</mass><inertia><ixx>0.01</ixx>'
+                '<iyy>0.01</iyy><izz>0.01</izz></inertia></inertial>')
     (tmp_path / "m.sdf").write_text(
         f'<sdf version="1.11"><model name="m"><link name="a">{inertial}</link>'
         f'<link name="b">{inertial}</link>'
         '<joint name="ja" type="revolute"><parent>world</parent><child>a</child><axis>'
         '<xyz>0 1 0</xyz></axis></joint><joint name="jb" type="revolute"><parent>world</parent>'
-        '<child>b</child><axis><xyz>0 0 1</xyz><mimic joint="ja"><multiplier>2</multiplier>'
-        '</mimic></axis></joint></model></sdf>')
-    result = run("simulate", tmp_path / "m.sdf", "--duration", "0")
-    assert result.exit_code == 0, result.stderr
-    assert "<mimic> coupling of joint 'jb'" in result.stderr
+        '<child>b</child><axis><xyz>0 1 0</xyz><mimic joint="ja"><multiplier>2</multiplier>'
+        '<reference>0.1</reference></mimic></axis></joint></model></sdf>')
+    for name, gain, constant in (("m.urdf", 0.1, 0.05), ("m.sdf", 2.0, -0.2)):
+        result = run("simulate", tmp_path / name, "--duration", "0.5", "--json")
+        assert result.exit_code == 0, result.stderr
+        assert "<mimic>" not in result.stderr
+        joints = json.loads(result.stdout)["final"]["joints"]
+        ja, jb = joints["ja"]["coordinates"][0], joints["jb"]["coordinates"][0]
+        assert abs(ja) > 0.1  # it moved under gravity
+        assert jb == pytest.approx(gain * ja + constant, abs=1e-12)
 
 
 def test_urdf_planar_joint_is_two_shifts_and_a_turn(tmp_path, run):

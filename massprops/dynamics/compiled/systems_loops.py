@@ -65,7 +65,8 @@ def _dir(rot, vel, acc, body, local, out, i):
 
 @array_inner
 def terms(pp, wp):
-    """Φ (m,), Φ̈ at u̇ = 0 (m,), ρ_b and ρ_a (m, 6), G (m, nv) into the workspace."""
+    """Φ (m,), Φ̈ at u̇ = 0 (m,), ρ_b and ρ_a (m, 6), G (m, nv) into the workspace; the
+    couplings' rows last (from the coordinates `systems_tree.kinematics` keeps in ws[34])."""
     pi, pf, size, pjoint, ji = at(pp, 12), at(pp, 13), at(pp, 20)[0], at(pp, 6), at(pp, 1)
     phi, gdot, rb, ra, g, s = at(wp, 19), at(wp, 20), at(wp, 21), at(wp, 22), at(wp, 23), at(wp, 5)
     rot, com, vel, acc = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3)
@@ -153,6 +154,17 @@ def terms(pp, wp):
                             x += rho[row + k, r] * s[r, c]
                         g[row + k, c] += x
                     j = pjoint[ji[j, 1]] if ji[j, 1] >= 0 else -1
+    ct, cv, qc = at(pp, 23), at(pp, 24), at(wp, 34)
+    for k in range(ct.shape[0]):  # the couplings' rows (`dynamics.systems.loops.Coupling`)
+        row = ct[k, 0]
+        if k == 0 or ct[k - 1, 0] != row:
+            phi[row] = gdot[row] = 0.0
+            for c in range(6):
+                rb[row, c] = ra[row, c] = 0.0
+            for c in range(g.shape[1]):
+                g[row, c] = 0.0
+        phi[row] += cv[k, 0] * qc[ct[k, 1]] - cv[k, 1]
+        g[row, ct[k, 2]] += cv[k, 0]
 
 
 @inlined

@@ -37,6 +37,7 @@ def workspace(prog):
     dims = prog[0]
     nq, nv, m, n, nj = dims[0], dims[1], dims[2], dims[3], dims[4]
     p, kk = max(m, nv), min(m, nv)
+    nqc = nq if prog[23].shape[0] else 0  # the coordinates, kept only for couplings' rows
     return (np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 6)), np.zeros((n, 6)),  # 0-3
             np.zeros((n, 6, 6)), np.zeros((6, nv)), np.zeros((nj, 3)), np.zeros((n, 6)),  # 4-7
             np.zeros((4, 3, 3)), np.zeros((16, 3)), np.zeros((6, 6)), np.zeros((n, 6)),  # 8-11
@@ -45,7 +46,7 @@ def workspace(prog):
             np.zeros(m), np.zeros((m, 6)), np.zeros((m, 6)), np.zeros((m, nv)),  # 20-23
             np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((m, nv)), np.zeros((p, p)),  # 24-27
             np.zeros((p, p)), np.zeros(p), np.zeros(1 + p, dtype=np.int64),  # 28-30
-            np.zeros((m, kk)), np.zeros((nv, kk)), np.zeros(nv), np.zeros(0),  # 31-34 (34: unused)
+            np.zeros((m, kk)), np.zeros((nv, kk)), np.zeros(nv), np.zeros(nqc),  # 31-34
             np.zeros(nv), np.zeros(m), np.zeros(max(nq, nv)), np.zeros(nq + nv),  # 35-38
             np.zeros(1 + p, dtype=np.int64), np.zeros(p))  # 39-40
 

@@ -106,7 +106,8 @@ def _column(s, col, w, p, turning):
 @array_inner
 def kinematics(pp, q, u, wp):
     """Per body: R, com, V and A at u̇ = 0 (with the joint's own bias term in ``cb``), the
-    spatial inertia about O; per dof a column of S; per joint its point (world)."""
+    spatial inertia about O; per dof a column of S; per joint its point (world); q itself
+    where the system has couplings (ws[34], for `systems_loops.terms`)."""
     ji, jaxes, jsp, jsc, jrp0 = at(pp, 1), at(pp, 2), at(pp, 3), at(pp, 4), at(pp, 5)
     bmass, binertia, brot0, bcom0 = at(pp, 7), at(pp, 8), at(pp, 9), at(pp, 10)
     rot, com, vel, acc = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3)
@@ -115,6 +116,9 @@ def kinematics(pp, q, u, wp):
     carry, qm, tmp, rp = m3[0], m3[1], m3[2], m3[3]
     d, p, w, cp = v3[0], v3[1], v3[2], v3[3]
     vp, ap, su, b2, c0, c1 = v6[0], v6[1], v6[2], v6[3], v6[4], v6[5]
+    qc = at(wp, 34)  # the coordinates, for the couplings' rows (sized 0 without couplings)
+    for i in range(qc.size):
+        qc[i] = q[i]
     for k in range(ji.shape[0]):
         kind, par, ch, iq, iu, nvj = ji[k, 0], ji[k, 1], ji[k, 2], ji[k, 3], ji[k, 4], ji[k, 6]
         for i in range(3):

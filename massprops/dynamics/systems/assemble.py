@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from massprops.dynamics.systems.loops import Primitive, primitives
+from massprops.dynamics.systems.loops import Coupling, Primitive, primitives
 from massprops.dynamics.systems.model import ONE_AXIS, WORLD, SystemScene
 from massprops.dynamics.systems.tree import NQ, NV, TreeJoint
 from massprops.errors import SceneError
@@ -45,6 +45,7 @@ class Tree:
     size: float
     loaded: list = field(default_factory=list)  # tree joint indices with springs/drives
     cut_loaded: list = field(default_factory=list)  # indices into ``cut`` with springs/drives
+    couplings: list[Coupling] = field(default_factory=list)  # rows after the primitives'
 
 
 def localized(scene: SystemScene) -> tuple[SystemScene, np.ndarray]:
@@ -199,8 +200,28 @@ def build_tree(scene: SystemScene) -> Tree:
     loaded = [n for n, j in enumerate(joints) if j.source is not None
               and _loaded(scene.joints[j.source])]
     cut_loaded = [n for n, k in enumerate(cut) if _loaded(scene.joints[k])]
+    couplings = [_coupling(scene, c, joints, of_scene) for c in scene.couplings]
     return Tree(bodies, joints, parent_joint, cut, prims, of_scene, iq, iu, scene.size, loaded,
-                cut_loaded)
+                cut_loaded, couplings)
+
+
+def _coupling(scene: SystemScene, c, joints: list[TreeJoint], of_scene: dict) -> Coupling:
+    """A scene's `JointCoupling` over tree coordinates: each joint a one-axis tree joint (a
+    reversed one's coordinate is the scene's negated); the row in metres (× the system size
+    where the follower turns)."""
+    terms = []
+    for k, coef in c.terms:
+        j = scene.joints[k]
+        where, n = of_scene[k]
+        if j.kind not in ("revolute", "prismatic") or where != "tree":
+            why = "closes a loop" if where == "cut" else f"is {j.kind}"
+            raise SceneError(f"{c.where}{c.name}: joint {j.name!r} {why}: only the coordinates "
+                             "of revolute and prismatic joints of the tree can be coupled")
+        tj = joints[n]
+        terms.append((tj.iq, tj.iu, -coef if tj.reversed else coef))
+    follower = scene.joints[c.terms[0][0]]
+    scale = scene.size if follower.kind == "revolute" else 1.0
+    return Coupling(c.name, tuple(terms), float(c.constant), scale)
 
 
 def _tree_order(j: TreeJoint, value: np.ndarray) -> np.ndarray:

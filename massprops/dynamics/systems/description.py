@@ -25,7 +25,7 @@ import numpy as np
 
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
 from massprops.dynamics.systems.inertials import check_bodies, judged, sdf_defaults
-from massprops.dynamics.systems.model import WORLD, SystemBody, SystemJoint
+from massprops.dynamics.systems.model import WORLD, JointCoupling, SystemBody, SystemJoint
 from massprops.dynamics.systems.tree import kinematics, mass_matrix
 from massprops.errors import RobotModelError
 from massprops.robot.joints.frames import WORLD_LINK, Mechanism, RobotJoint, compose
@@ -41,7 +41,8 @@ BASES = ("fixed", "floating")
 class Description:
     """A description ready for a system scene: ``bodies`` and ``joints`` (systems values),
     ``gravity`` (3,) m/s² the description states (None: none stated), ``warnings`` one line each,
-    ``body_of`` link name -> body index (WORLD for the ground), ``path`` the file."""
+    ``body_of`` link name -> body index (WORLD for the ground), ``path`` the file, ``couplings``
+    the description's joint relations over ``joints`` (mimic, MJCF joint/tendon equalities)."""
 
     path: Path
     bodies: tuple[SystemBody, ...]
@@ -49,6 +50,7 @@ class Description:
     gravity: np.ndarray | None
     warnings: tuple[str, ...]
     body_of: dict
+    couplings: tuple[JointCoupling, ...] = ()
 
 
 def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | None = None,
@@ -189,7 +191,25 @@ def _build(mech: Mechanism, masses: dict, base: str | None, warnings: list[str],
                                       loop=j.loop))
     _check_masses(bodies, sys_joints, heads, path, mech)
     return Description(path, tuple(bodies), tuple(sys_joints), mech.gravity, tuple(warnings),
-                       body_of)
+                       body_of, _couplings(mech, sys_joints, path))
+
+
+def _couplings(mech: Mechanism, sys_joints: list[SystemJoint], path: Path) -> tuple:
+    """The mechanism's couplings over the system joints (by name; a fixed joint is none)."""
+    index = {j.name: k for k, j in enumerate(sys_joints)}
+    kinds = {j.name: j.kind for j in mech.joints}
+    out = []
+    for c in mech.couplings:
+        where = f"{c.node.file or path}:{c.node.line}: <{c.node.tag}>: "
+        terms = []
+        for name, coef in c.terms:
+            if name not in index:
+                why = (f"is {kinds[name]}: it has no coordinate" if name in kinds
+                       else "is not a joint of the description; check the spelling")
+                raise RobotModelError(f"{where}{c.name}: joint {name!r} {why}")
+            terms.append((index[name], float(coef)))
+        out.append(JointCoupling(c.name, tuple(terms), float(c.constant), where))
+    return tuple(out)
 
 
 def _lumped(head: str, members: list[str], poses: dict, masses: dict) -> SystemBody:

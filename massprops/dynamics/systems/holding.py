@@ -36,7 +36,8 @@ def holding(system, t: float, y: np.ndarray) -> list[np.ndarray]:
     h = tr.generalized(tree, kin, tr.transmitted(tree, tr.body_forces(tree, kin, fext)))
     motor = h - tau
     if system.m:
-        g = terms(tree.prims, kin, tr.jacobians(tree, kin), system.nv, tree.size)[1]
+        g = terms(tree.prims, kin, tr.jacobians(tree, kin), system.nv, tree.size,
+                  tree.couplings, q)[1]
         act = np.array([i for j in tree.joints if j.kind != "free"
                         for i in range(j.iu, j.iu + j.nv)], dtype=int)
         if act.size:

@@ -12,6 +12,8 @@ prismatic joint those and one perp against the turn about the axis, a fixed join
 three perps. For each row the velocity Jacobian is a pair of spatial forces (ρ_b, ρ_a) with
 Φ̇ = ρ_b·V_b + ρ_a·V_a (so G = ρ_b J_b + ρ_a J_a) and the joint's reaction on b is Σ λ ρ_b;
 ``terms`` also gives Φ̈ at u̇ = 0 (the acceleration bias), exactly, from the body motions.
+A `Coupling` (a description's mimic or joint equality) is one more row after them, linear in
+the tree coordinates.
 """
 
 from __future__ import annotations
@@ -42,6 +44,19 @@ class Primitive:
     @property
     def rows(self) -> int:
         return 3 if self.kind == "point" else 1
+
+
+@dataclass(frozen=True, eq=False)
+class Coupling:
+    """A linear relation of tree coordinates, one constraint row Φ = scale (Σ c q[iq] − constant)
+    (``terms`` ((iq, iu, c), ...); scale: the system size where the relation is in radians, so
+    that every row is in metres), G's row scale c at each iu, Φ̈ at u̇ = 0 zero. It acts on the
+    joints, not on bodies: its reaction is a generalised force on each joint, as a drive's."""
+
+    name: str
+    terms: tuple
+    constant: float
+    scale: float
 
 
 def _normals(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -112,11 +127,12 @@ def _point(kin, body: int, local: np.ndarray):
     return x, v, dvo + cross(dw, x) + cross(w, v)
 
 
-def terms(prims: list[Primitive], kin, jac: np.ndarray, nv: int, size: float):
+def terms(prims: list[Primitive], kin, jac: np.ndarray, nv: int, size: float,
+          couplings: list[Coupling] = (), q: np.ndarray | None = None):
     """Φ (m,), G (m, nv), Φ̈ at the kinematics' accelerations (m,), and the spatial-force rows
     on b and on a (m, 6 each) for the reactions. ``kin`` must hold accelerations at u̇ = 0
-    for the bias."""
-    m = sum(p.rows for p in prims)
+    for the bias. The ``couplings``' rows (at the coordinates ``q``) come last."""
+    m = sum(p.rows for p in prims) + len(couplings)
     phi, gdot = np.empty(m), np.empty(m)
     rho_b, rho_a = np.zeros((m, 6)), np.zeros((m, 6))
     row = 0
@@ -167,4 +183,10 @@ def terms(prims: list[Primitive], kin, jac: np.ndarray, nv: int, size: float):
             if p.a != WORLD:
                 g[r + k] += rho_a[r + k] @ jac[p.a]
         r += p.rows
+    for c in couplings:
+        phi[r], gdot[r] = 0.0, 0.0
+        for k, (iq, iu, coef) in enumerate(c.terms):
+            phi[r] += c.scale * coef * q[iq] - (c.scale * c.constant if k == 0 else 0.0)
+            g[r, iu] += c.scale * coef
+        r += 1
     return phi, g, gdot, rho_b, rho_a

@@ -69,6 +69,19 @@ class SystemJoint:
 
 
 @dataclass(frozen=True, eq=False)
+class JointCoupling:
+    """A linear relation between one-axis joints' coordinates, Σ c_i q_i = constant (a URDF or
+    SDF ``<mimic>``, an MJCF joint or fixed-tendon equality): ``terms`` ((scene joint index,
+    c_i), ...), the first the follower whose unit (rad or m) the relation is written in;
+    ``where`` the ``file:line: element: `` of its messages."""
+
+    name: str
+    terms: tuple
+    constant: float = 0.0
+    where: str = ""
+
+
+@dataclass(frozen=True, eq=False)
 class BodyForce:
     """kind "force" (N) or "torque" (N·m) on ``body``, ``vector`` in ``frame`` (world or body
     axes); a force acts at ``point`` (world at t = 0; None: the COM); start <= t < end."""
@@ -124,6 +137,7 @@ class SystemScene:
     warnings: tuple[str, ...] = ()
     places: dict = field(default_factory=dict)  # "initial.positions.A" -> "file:line: key: "
     robot: str | None = None  # the description a `model:` scene names (outputs add `holding`)
+    couplings: tuple[JointCoupling, ...] = ()  # a description's mimic/equality relations
 
     @property
     def size(self) -> float:

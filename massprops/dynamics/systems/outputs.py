@@ -3,10 +3,11 @@
 Reactions are the notes' g^(c) = M ḣ + b - g: each body's net spatial force with its computed
 acceleration minus the applied loads and the cut joints' forces on it (λ), summed over each
 subtree from the leaves in; a tree joint's reaction on its child is that sum less the joint's own
-applied load (spring, damper, drive along its axis). A cut joint's reaction on its second body is
-Σ λ ρ_b: its constraint force only, as for a tree joint, since a loaded cut joint's spring,
-damper and drive are applied loads on its two bodies (`cutjoint`, in ``fext``). All are reported
-on the scene joint's second body at the joint's point, world frame.
+applied load (spring, damper, drive along its axis) and a coupling's generalised force on it
+(`loops.Coupling`: λ times its row of G, like a motor's). A cut joint's reaction on its second
+body is Σ λ ρ_b: its constraint force only, as for a tree joint, since a loaded cut joint's
+spring, damper and drive are applied loads on its two bodies (`cutjoint`, in ``fext``). All are
+reported on the scene joint's second body at the joint's point, world frame.
 """
 
 from __future__ import annotations
@@ -135,6 +136,11 @@ def _reactions(system, t: float, y: np.ndarray, sol, force: np.ndarray, torque: 
             if p.a != WORLD:
                 net[p.a] -= fa
         r += p.rows
+    tau = tau.copy()
+    for c in tree.couplings:  # a coupling's reaction drives its joints, as a motor would
+        for _, iu, coef in c.terms:
+            tau[iu] += sol.lam[r] * c.scale * coef
+        r += 1
     through = tr.transmitted(tree, net)
     for k, sj in enumerate(scene.joints):
         where, n = tree.of_scene[k]

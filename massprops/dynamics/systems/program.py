@@ -19,7 +19,9 @@ A tuple of C-contiguous arrays, int64 or float64, in this order (the kernels ind
  21 loaded cut joints (nc, 3) int [0 revolute / 1 prismatic, a, b]; 22 (nc, 21) [axis in a's
    frame, the normal the turn is measured from in a's frame and in b's, the joint point in a's
    and in b's frame, stiffness, rest, damping, drive, start, end] (`cutjoint`; body frames,
-   world for the world).
+   world for the world);
+ 23 coupling terms (nt, 3) int [row, iq, iu]; 24 (nt, 2) [scale c, scale constant on a
+   coupling's first term, else 0] (`loops.Coupling`: Φ_row = Σ scale c q[iq] − scale constant).
 Frames and meanings as in `tree`, `loops` and `System` (the numpy objects these mirror).
 """
 
@@ -86,8 +88,18 @@ def build_program(system) -> tuple:
            np.asarray(system.weights, float).reshape(n, 3), pi, pf, fi, ff, si, sf, li, lf,
            np.array([tree.size, tolerances.CONSTRAINT_RANK_RTOL,
                      tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size,
-                     tolerances.NEAR_SINGULAR_MARGIN]), ci, cf)
+                     tolerances.NEAR_SINGULAR_MARGIN]), ci, cf, *_couplings(tree, row))
     return tuple(np.ascontiguousarray(a) for a in out)
+
+
+def _couplings(tree, first: int) -> tuple[np.ndarray, np.ndarray]:
+    """Program entries 23 and 24: the couplings' terms, their rows from ``first`` on."""
+    ti, tf = [], []
+    for r, c in enumerate(tree.couplings):
+        for k, (iq, iu, coef) in enumerate(c.terms):
+            ti.append([first + r, iq, iu])
+            tf.append([c.scale * coef, c.scale * c.constant if k == 0 else 0.0])
+    return np.array(ti, np.int64).reshape(-1, 3), np.array(tf, float).reshape(-1, 2)
 
 
 def _cut_loads(scene, tree) -> tuple[np.ndarray, np.ndarray]:

@@ -18,6 +18,7 @@ gravity 9.81 m/s² down z (MJCF: its ``<option gravity>``), the zero pose at res
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from pathlib import Path
 
@@ -106,6 +107,19 @@ def description_scene(path: str | os.PathLike, *, duration: float = 1.0) -> Syst
                   OutputSettings(), os.fspath(path), {})
 
 
+def _leaders_kept(desc: Description, positions: dict) -> dict:
+    """``positions`` with each coupling's leaders named at their given (else zero) coordinate,
+    where the scene names none of the coupling's joints and no coupling makes them follow:
+    the start's projection then moves only the followers."""
+    out = dict(positions)
+    followers = {desc.joints[c.terms[0][0]].name for c in desc.couplings}
+    for c in desc.couplings:
+        names = [desc.joints[k].name for k, _ in c.terms]
+        if not any(n in positions for n in names):
+            out.update({n: (0.0,) for n in names[1:] if n not in followers})
+    return out
+
+
 def _scene(desc: Description, gravity, forces, springs, initial, time, output, source: str,
            places: dict) -> SystemScene:
     if not desc.bodies:
@@ -113,8 +127,12 @@ def _scene(desc: Description, gravity, forces, springs, initial, time, output, s
                          "(base: floating frees the base)")
     gravity = np.array(gravity, float)
     gravity.setflags(write=False)
+    if desc.couplings:  # a coupling's offset breaks the zero pose: its follower moves to it
+        initial = dataclasses.replace(initial, project=True,
+                                      positions=_leaders_kept(desc, initial.positions))
     scene = SystemScene(desc.bodies, desc.joints, gravity, tuple(forces), tuple(springs),
                         initial, time, output, source=source, input_files=(desc.path,),
-                        warnings=desc.warnings, places=places, robot=os.fspath(desc.path))
+                        warnings=desc.warnings, places=places, robot=os.fspath(desc.path),
+                        couplings=desc.couplings)
     check_mass_matrix(scene)
     return scene

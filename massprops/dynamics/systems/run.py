@@ -233,7 +233,11 @@ def _holding(system: System, y: np.ndarray, notes: list[str]) -> list | None:
     from massprops.dynamics.systems.holding import LOOP_RULE, holding
 
     if system.m:
-        notes.append(f"{system.scene.source}: holding forces with closed loops: {LOOP_RULE}")
+        held = " and couplings" if system.tree.couplings else ""
+        if system.tree.prims:
+            held = "closed loops" + held
+        notes.append(f"{system.scene.source}: holding forces with {held.removeprefix(' and ')}: "
+                     f"{LOOP_RULE}")
     if system.falling is not None:  # holding is against the weight: the world frame's system
         system = System(system.scene, system.tree, system.origin)
     return holding(system, system.scene.time.duration, y)

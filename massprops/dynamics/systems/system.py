@@ -55,7 +55,8 @@ class System:
         self.scene, self.tree = scene, tree
         self.origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=float)
         self.falling = falling  # the free-fall frame this system runs in (falling.py), or None
-        self.nq, self.nv, self.m = tree.nq, tree.nv, sum(p.rows for p in tree.prims)
+        self.nq, self.nv, self.m = tree.nq, tree.nv, sum(p.rows for p in tree.prims) + len(
+            tree.couplings)
         bodies = tree.bodies
         # in the falling frame the fictitious force −m g cancels each weight
         gravity = np.zeros(3) if falling is not None else np.asarray(scene.gravity, float)
@@ -134,7 +135,7 @@ class System:
         rho_b = rho_a = np.zeros((0, 6))
         if self.m:
             phi, g, gdot, rho_b, rho_a = terms(self.tree.prims, kin0, tr.jacobians(self.tree, kin0),
-                                        self.nv, self.tree.size)
+                                               self.nv, self.tree.size, self.tree.couplings, q)
             b = chol.lower(g.T).T  # G L⁻ᵀ
             uu, sv, _ = np.linalg.svd(b, full_matrices=False)
             keep = sv > tolerances.CONSTRAINT_RANK_RTOL * (sv[0] if sv.size else 0.0)
@@ -162,7 +163,13 @@ class System:
                 name = self.scene.joints[self.tree.cut[p.joint]].name
                 names.append(name) if name not in names else None
             r += p.rows
-        named = ", ".join(names) or ", ".join(self.scene.joints[k].name for k in self.tree.cut)
+        for c in self.tree.couplings:
+            if rows[r] > 0.1:
+                names.append(c.name)
+            r += 1
+        named = ", ".join(names) or ", ".join(
+            [*(self.scene.joints[k].name for k in self.tree.cut),
+             *(c.name for c in self.tree.couplings)])
         when = f"t = {t:.6g} s" if since is None else f"between t = {since:.6g} and {t:.6g} s"
         return (f"{self.scene.source}: singular pose {when}: the loop closed by "
                 f"joint(s) {named} lost a constraint direction there (the constraints no "
@@ -175,7 +182,7 @@ class System:
         q, u = y[:self.nq], y[self.nq:]
         kin = tr.kinematics(self.tree, q, u)
         phi, g, _, _, _ = terms(self.tree.prims, kin, tr.jacobians(self.tree, kin), self.nv,
-                             self.tree.size)
+                                self.tree.size, self.tree.couplings, q)
         return phi, g, MassFactor(tr.mass_matrix(self.tree, kin), self.blocks)
 
     def project(self, y: np.ndarray, fixed: tuple[set, set] = (set(), set()),

@@ -25,8 +25,8 @@ import numpy as np
 from massprops.robot.formats.values import Values
 from massprops.robot.formats.xmltree import Node
 
-__all__ = ["KINDS", "WORLD_LINK", "Mechanism", "RobotJoint", "compose", "mark_loops",
-           "poses_from_tree"]
+__all__ = ["KINDS", "WORLD_LINK", "Mechanism", "RobotCoupling", "RobotJoint", "compose",
+           "mark_loops", "poses_from_tree"]
 
 Pose = tuple[np.ndarray, np.ndarray]
 WORLD_LINK = "world"
@@ -68,13 +68,26 @@ class RobotJoint:
 
 
 @dataclass(frozen=True, eq=False)
+class RobotCoupling:
+    """A linear relation Σ c_i q_i = constant between one-axis joints' coordinates (a URDF
+    ``<mimic>``, an MJCF joint or fixed-tendon ``<equality>``): ``terms`` ((joint name, c_i),
+    ...), the follower first (the relation is in its unit); ``node`` the element it came from."""
+
+    name: str
+    terms: tuple
+    constant: float
+    node: Node
+
+
+@dataclass(frozen=True, eq=False)
 class Mechanism:
     """The joints of a description and every link's pose in the model frame at the zero pose.
 
     floating : links that the description itself sets free (an MJCF ``<freejoint>``, a URDF
     ``floating`` joint). gravity : (3,) m/s² the description states (MJCF ``<option
     gravity>``), else None. notes : what the description holds that a simulation ignores
-    (friction, armature, actuators), one phrase each. remarks : how a number here differs from
+    (friction, armature, actuators), one phrase each. couplings : the joint relations the
+    engine enforces (`RobotCoupling`). remarks : how a number here differs from
     the format's own (MJCF ``ref``), one warning line each.
     """
 
@@ -86,6 +99,7 @@ class Mechanism:
     gravity: np.ndarray | None = None
     notes: tuple[str, ...] = field(default=())
     remarks: tuple[str, ...] = field(default=())
+    couplings: tuple[RobotCoupling, ...] = field(default=())
 
 
 def compose(a: Pose, b: Pose) -> Pose:

@@ -40,7 +40,7 @@ from massprops.robot.joints.frames import (
     compose,
     unit_axis,
 )
-from massprops.robot.joints.mjcf_loops import loop_joint
+from massprops.robot.joints.mjcf_loops import COUPLINGS, coupling, fixed_tendons, loop_joint
 
 __all__ = ["mjcf_mechanism"]
 
@@ -228,9 +228,13 @@ def mjcf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
     r = _Reader(root, path)
     for top in root.findall("worldbody"):
         r.walk(top, "main", IDENTITY, WORLD_LINK, IDENTITY)
+    couplings, tendons = [], fixed_tendons(r, root)
     for eq in root.findall("equality"):
         for k, node in enumerate(eq.children):
-            r.joints.append(loop_joint(r, node, k))
+            if node.tag in COUPLINGS:
+                couplings.append(coupling(r, node, k, tendons))
+            else:
+                r.joints.append(loop_joint(r, node, k))
     joints = [j for j in r.joints if j is not None]
     gravity = None
     for option in root.findall("option"):
@@ -244,4 +248,5 @@ def mjcf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
         "their coordinates here count from the pose as written (MuJoCo's qpos minus ref); "
         "springref and range are shifted alike, the motion is MuJoCo's",)
     return Mechanism(path, "mjcf", tuple(joints), r.poses, frozenset(r.floating), gravity,
-                     tuple(sorted(r.notes)), remarks)
+                     tuple(sorted(r.notes)), remarks,
+                     tuple(c for c in couplings if c is not None))

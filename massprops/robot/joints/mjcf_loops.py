@@ -2,10 +2,12 @@
 
 ``<connect body1 body2 anchor>`` (anchor in body1's frame), or ``site1 site2`` (sites that meet
 as written), is a spherical loop joint; ``<weld body1 body2 [anchor]>`` holding the pose as
-written is a fixed one; both are always cut joints of the tree. Other equalities (joint, tendon,
-flex), a weld's ``relpose`` or ``torquescale``, and sites apart as written are refused in one
-line naming the element. ``r`` is the reader (`mjcf._Reader`: its values, defaults, body poses
-and sites).
+written is a fixed one; both are always cut joints of the tree. ``<joint joint1 joint2
+polycoef>`` and ``<tendon tendon1 tendon2 polycoef>`` over fixed tendons are couplings
+(`coupling`) where the polynomial is linear. Other equalities (flex, spatial tendons, a
+nonlinear polycoef), a weld's ``relpose`` or ``torquescale``, and sites apart as written are
+refused in one line naming the element. ``r`` is the reader (`mjcf._Reader`: its values,
+defaults, body poses and sites).
 """
 
 from __future__ import annotations
@@ -13,9 +15,59 @@ from __future__ import annotations
 import numpy as np
 
 from massprops.robot.formats.xmltree import Node
-from massprops.robot.joints.frames import IDENTITY, WORLD_LINK, RobotJoint
+from massprops.robot.joints.frames import IDENTITY, WORLD_LINK, RobotCoupling, RobotJoint
 
-__all__ = ["loop_joint"]
+__all__ = ["coupling", "fixed_tendons", "loop_joint"]
+
+COUPLINGS = ("joint", "tendon")
+"""The equality elements that are couplings, not loop joints."""
+
+
+def fixed_tendons(r, root: Node) -> dict:
+    """name -> ((joint, coef), ...) of every ``<tendon><fixed>`` (its length Σ coef q)."""
+    out = {}
+    for group in root.findall("tendon"):
+        for node in group.children:
+            if node.tag == "fixed" and node.attrs.get("name"):
+                out[node.attrs["name"]] = tuple(
+                    (j.attrs.get("joint", ""), r.v.number(j, "coef", 1.0))
+                    for j in node.children if j.tag == "joint")
+    return out
+
+
+def coupling(r, node: Node, k: int, tendons: dict) -> RobotCoupling | None:
+    """``<joint joint1 joint2 polycoef>`` or ``<tendon tendon1 tendon2 polycoef>`` (fixed
+    tendons): MuJoCo's y − y0 = a0 + a1 (x − x0) with y0, x0 the values at qpos0, which is
+    where our coordinates (qpos − ref) are zero: Σ y's terms − a1 Σ x's terms = a0. Without
+    joint2/tendon2 the first is held at y0 + a0. A polycoef with a2..a4 not 0 is refused."""
+    v = r.v
+    a = r.defaults.attrs(node, "main")
+    if a.get("active", "true") == "false":
+        return None
+    first, second = f"{node.tag}1", f"{node.tag}2"
+    if first not in a:
+        raise v.error(node, f"<{node.tag}> equality needs {first}=")
+    poly = v.numbers(node, a.get("polycoef", "0 1 0 0 0"), "polycoef=", (1, 2, 3, 4, 5),
+                     'polycoef="0 1 0 0 0"')
+    if np.any(poly[2:]):
+        raise v.error(node, f"<{node.tag}> equality: polycoef {' '.join(f'{x:g}' for x in poly)} "
+                            "is not linear; massprops couples coordinates linearly only "
+                            "(a2 = a3 = a4 = 0)")
+
+    def side(name: str) -> tuple:
+        if node.tag == "joint":
+            return ((name, 1.0),)
+        if name not in tendons:
+            raise v.error(node, f"no fixed tendon named {name!r}: a spatial tendon's length "
+                                "is no linear joint relation; check the spelling")
+        return tendons[name]
+
+    terms = side(a[first])
+    if second in a:
+        slope = float(poly[1]) if poly.size > 1 else 1.0
+        terms += tuple((j, -slope * c) for j, c in side(a[second]))
+    name = a.get("name") or f"{node.tag}{k}"
+    return RobotCoupling(name, terms, float(poly[0]), node)
 
 
 def loop_joint(r, node: Node, k: int) -> RobotJoint | None:

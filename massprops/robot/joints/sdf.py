@@ -27,6 +27,7 @@ from massprops.robot.joints.frames import (
     IDENTITY,
     WORLD_LINK,
     Mechanism,
+    RobotCoupling,
     RobotJoint,
     compose,
     inverse,
@@ -53,7 +54,7 @@ def sdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
     """Joints and link poses of every ``<model>`` under the SDF root ``root``."""
     v = Values(path)
     version = _version(root)
-    joints, poses, notes = [], {}, set()
+    joints, poses, notes, couplings = [], {}, set(), []
     for model in root.iter("model"):
         prefix = _scope(model)
         placed = IDENTITY
@@ -68,13 +69,14 @@ def sdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
         static = _static(model)
         full = "".join(n + "::" for n in _names(model))
         for node in model.findall("joint"):
-            joint = _joint(node, (prefix, full), graph, v, version, set(links), notes)
+            joint = _joint(node, (prefix, full), graph, v, version, set(links), notes,
+                           couplings)
             if static:  # a static model does not move: every joint is a weld
                 joint = RobotJoint(joint.name, "fixed", joint.parent, joint.child, joint.frame,
                                    np.zeros((0, 3)), joint.node)
             joints.append(joint)
     return Mechanism(path, "sdf", tuple(mark_loops(joints, list(poses))), poses, frozenset(),
-                     None, tuple(sorted(notes)))
+                     None, tuple(sorted(notes)), couplings=tuple(couplings))
 
 
 def _static(model: Node) -> bool:
@@ -136,7 +138,9 @@ def _attached_link(frame: str, graph: _FrameGraph) -> str | None:
 
 
 def _joint(node: Node, scopes: tuple[str, str], graph: _FrameGraph, v: Values, version,
-           links: set, notes: set) -> RobotJoint:
+           links: set, notes: set, couplings: list) -> RobotJoint:
+    """One ``<joint>``; an ``<axis><mimic>`` (SDFormat 1.11) adds its coupling to
+    ``couplings``: follower = multiplier (leader − reference) + offset (defaults 1, 0, 0)."""
     name = node.attrs.get("name", "")
     if not name:
         raise v.error(node, 'a joint needs a name="..."')
@@ -167,9 +171,9 @@ def _joint(node: Node, scopes: tuple[str, str], graph: _FrameGraph, v: Values, v
         axes.append(in_model[0].T @ _axis_in_model(axis, xyz_el, xyz, graph, in_model, v,
                                                     version))
         axes[-1] = unit_axis(v, xyz_el, axes[-1])
-        if axis.find("mimic") is not None:  # 1.11: no constraint here; said, not hidden
-            notes.add(f"a <mimic> coupling of joint {prefix + name!r}, not enforced (it moves "
-                      "on its own)")
+        mimic = axis.find("mimic")
+        if mimic is not None:
+            couplings.append(_mimic(mimic, prefix + name, prefix, v))
         limit = axis.find("limit")
         lo = _number(limit, "lower", v)
         hi = _number(limit, "upper", v)
@@ -185,6 +189,19 @@ def _joint(node: Node, scopes: tuple[str, str], graph: _FrameGraph, v: Values, v
     return RobotJoint(prefix + name, kind, parent, child, frame,
                       np.array(axes).reshape(-1, 3), node,
                       tuple(limits) if limits else None, damping)
+
+
+def _mimic(mimic: Node, follower: str, prefix: str, v: Values) -> RobotCoupling:
+    leader = mimic.attrs.get("joint")
+    if not leader:
+        raise v.error(mimic, f'joint {follower!r}: <mimic> needs joint="..." (the joint it '
+                             "follows)")
+    values = {tag: _number(mimic, tag, v) for tag in ("multiplier", "offset", "reference")}
+    gain = 1.0 if values["multiplier"] is None else values["multiplier"]
+    offset, reference = values["offset"] or 0.0, values["reference"] or 0.0
+    return RobotCoupling(f"{follower} mimics {prefix + leader}",
+                         ((follower, 1.0), (prefix + leader, -gain)), offset - gain * reference,
+                         mimic)
 
 
 def _axis_in_model(axis: Node, xyz_el: Node, xyz: np.ndarray, graph: _FrameGraph, in_model,

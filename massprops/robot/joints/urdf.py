@@ -12,6 +12,7 @@ from massprops.robot.formats.xmltree import Node
 from massprops.robot.joints.frames import (
     IDENTITY,
     Mechanism,
+    RobotCoupling,
     RobotJoint,
     poses_from_tree,
     unit_axis,
@@ -28,10 +29,10 @@ def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
     (the child link frame in the parent link frame), ``<axis xyz>`` (joint frame; default
     1 0 0, the specification's), ``<limit lower upper>`` and ``<dynamics damping friction>``;
     ``planar`` is two shifts and a turn through massless stages (`_planar`).
-    A ``<mimic>`` coupling is not a constraint here: said in the notes (Gazebo classic and
-    Pinocchio's default reader leave it out too), never silently dropped."""
+    ``<mimic joint multiplier offset>`` is the coupling q = multiplier q_joint + offset
+    (defaults 1 and 0), enforced as a constraint (`frames.RobotCoupling`)."""
     v = Values(path)
-    joints, tree, notes, mimics = [], [], set(), []
+    joints, tree, notes, couplings = [], [], set(), []
     for node in root.findall("joint"):
         name = node.attrs.get("name")
         if not name:
@@ -63,8 +64,15 @@ def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
             if v.number(dyn, "friction", 0.0):
                 notes.add("joint friction")
         mimic = node.find("mimic")
-        if mimic is not None:  # a coupling the engine has no constraint for: said, not hidden
-            mimics.append(f"{name} follows {mimic.attrs.get('joint', '?')}")
+        if mimic is not None:
+            leader = mimic.attrs.get("joint")
+            if not leader:
+                raise v.error(mimic, f'joint {name!r}: <mimic> needs joint="..." (the joint '
+                                     "it follows)")
+            couplings.append(RobotCoupling(
+                f"{name} mimics {leader}", ((name, 1.0), (leader, -v.number(mimic, "multiplier",
+                                                                            1.0))),
+                v.number(mimic, "offset", 0.0), mimic))
         if kind == "planar":
             _planar(name, parent, child, pose, axes[0], node, joints, tree)
             continue
@@ -75,12 +83,10 @@ def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
     roots = [name for name in links if name not in children]
     poses = poses_from_tree(tree, roots)
     floating = frozenset(j.child for j in joints if j.kind == "free")
-    if mimics:
-        notes.add(f"<mimic> couplings, not enforced: each joint moves on its own "
-                  f"({', '.join(mimics[:4])}{' ...' if len(mimics) > 4 else ''})")
     if root.find("transmission") is not None:
         notes.add("transmissions (actuators)")
-    return Mechanism(path, "urdf", tuple(joints), poses, floating, None, tuple(sorted(notes)))
+    return Mechanism(path, "urdf", tuple(joints), poses, floating, None, tuple(sorted(notes)),
+                     couplings=tuple(couplings))
 
 
 def _planar(name: str, parent: str, child: str, pose, normal: np.ndarray, node: Node,
