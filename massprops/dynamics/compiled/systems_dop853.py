@@ -12,7 +12,10 @@ step's B (-1: none yet), rank of G at the start (-1: unchecked)]; fstats: [large
 correction, largest velocity correction, singularity margin, time of a failure, start of the
 failing step, residual left unclosed, smallest margin at an accepted state]. A failure stops
 the segment with its status (codes in `systems_step`); ``yfail`` then holds the state where it
-happened.
+happened. A stage where M is no longer positive definite (LINALG: a step so far beyond
+stability that the stage state flew off, M about the origin lost to round-off, e.g. the first
+step HINIT guesses on a stiff system) is a rejected step, as an infinite error is; only the
+step falling to round-off (UNDERFLOW) then ends the run.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ import numpy as np
 from massprops.dynamics.compiled.jit import array_inner, inlined
 from massprops.dynamics.compiled.systems_step import (
     CROSSED,
+    LINALG,
     OK,
     STEP_LIMIT,
     UNDERFLOW,
@@ -114,14 +118,24 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
         if istats[0] >= max_steps:
             fail(istats, fstats, yfail, STEP_LIMIT, t, y)
             return
+        wild = False
         for s in range(1, 12):
             _stage(y, h, k, s, ytmp)
             t_last = t + h * C[s]
             status = rhs_ref(pp, wp, tw, ytmp, k[s], rank0)
+            if status == LINALG:  # a stage thrown far off (M lost to round-off there): the
+                wild = True       # step is far beyond stability, as an infinite error says
+                istats[1] += s
+                break
             if status != OK:
                 istats[1] += s
                 fail(istats, fstats, yfail, status, t_last, ytmp)
                 return
+        if wild:
+            h *= FAC_MIN
+            rejected = True
+            istats[2] += 1
+            continue
         istats[1] += 11
         err5 = err3 = 0.0
         for i in range(n):
