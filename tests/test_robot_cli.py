@@ -3,9 +3,11 @@ failed check, and what each command path imports."""
 
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -132,3 +134,21 @@ def test_model_usage_errors_exit_2(run, args):
 
     res = run("model", *args, ARM)
     assert res.exit_code == 2 and res.stdout == ""
+
+
+def test_model_table_through_a_pipe_keeps_every_number_and_unit(tmp_path, run):
+    """Piped, the table's width is fixed; a link name of 70 characters (real descriptions have
+    them) must widen the table, not cut the numbers to "…"; the headers keep their units."""
+    src = Path(__file__).parent / "robots" / "arm_description"
+    copy = tmp_path / "arm_description"
+    shutil.copytree(src, copy)
+    urdf = copy / "urdf" / "arm.urdf"
+    urdf.write_text(urdf.read_text().replace('"upper_arm"', '"upper_arm_' + "x" * 60 + '"'))
+    short, wide = run("model", src / "urdf" / "arm.urdf"), run("model", urdf)
+    assert short.exit_code == wide.exit_code == 0, wide.stderr
+    assert "…" not in wide.stdout and "mass [kg]" in wide.stdout and "COM off [m]" in wide.stdout
+
+    def rows(out: str) -> list[list[str]]:
+        return [line.split()[1:] for line in out.splitlines()[2:] if line.strip()]
+
+    assert rows(wide.stdout) == rows(short.stdout)

@@ -22,7 +22,7 @@ from massprops.dynamics.compiled.systems_step import project, rhs, workspace
 from massprops.dynamics.systems import tree as tr
 from massprops.dynamics.systems.robot_scene import load_any_system
 from massprops.dynamics.systems.run import prepare, simulate_system
-from massprops.errors import RobotModelError, SceneError
+from massprops.errors import RobotModelError
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -189,8 +189,19 @@ def test_cli_simulates_a_mimic_robot_and_says_nothing_of_mimic(tmp_path):
         -final["lead"]["coordinates"][0], abs=1e-12)
 
 
-def test_a_coupled_joint_that_is_fixed_is_refused(tmp_path):
-    robot = _gears(1.0, 0.0).replace('name="lead" type="continuous"', 'name="lead" type="fixed"')
-    with pytest.raises((RobotModelError, SceneError)) as info:
-        load_any_system(_scene(tmp_path, robot, positions="{}"))
-    assert "'lead'" in str(info.value) and "fixed" in str(info.value)
+def test_a_fixed_joint_in_a_coupling_counts_as_zero(tmp_path):
+    """A reduced model welds joints that mimic tags still name: a fixed leader's coordinate is
+    0, so its follower is held at the offset; a fixed follower has nothing to move: the
+    coupling is left out, said in one warning line."""
+    held = _gears(-2.0, 0.3).replace('name="lead" type="continuous"', 'name="lead" type="fixed"')
+    scene = load_any_system(_scene(tmp_path, held, body="wheel2", positions="{}"))
+    follow = simulate_system(scene, rtol=1e-12).samples.coordinates[0][:, 0]
+    assert np.abs(follow - 0.3).max() <= 1e-13
+    welded = _gears(-2.0, 0.3).replace('name="follow" type="continuous"',
+                                       'name="follow" type="fixed"')
+    scene = load_any_system(_scene(tmp_path, welded, body="wheel1", positions="{}"))
+    said = [w for w in scene.warnings if "left out" in w]
+    assert len(said) == 1 and "'follow'" not in said[0] and "follow" in said[0]
+    samples = simulate_system(scene, rtol=1e-12).samples
+    lead, t = samples.coordinates[0][:, 0], samples.t
+    assert np.abs(lead - 0.5 * (0.7 / 0.2) * t ** 2).max() <= 1e-9  # wheel1 alone

@@ -24,6 +24,19 @@ from massprops.cli.common import cli_text
 _console = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
 
 
+def _print_table(table: Table) -> None:
+    """``table`` whole: a pipe's fixed width must not cut a number to "…" (a robot's long link
+    names made pr2's mass column "0.…"), so a wider table gets the width it needs there."""
+    if _console.is_terminal:
+        _console.print(table)
+        return
+    need = _console.measure(table, options=_console.options.update_width(10_000)).maximum
+    if need <= _console.width:
+        _console.print(table)
+    else:
+        Console(highlight=False, width=need, file=_console.file).print(table)
+
+
 def _row(table: Table, *cells) -> None:
     """Add a row of plain text: units like "[m³]" must not be read as rich markup tags."""
     table.add_row(*(Text(c) if isinstance(c, str) else c for c in cells))
@@ -139,7 +152,7 @@ def print_alignment(input_path: str, output_path: str, alignment, repairs: dict 
     _row(t, "map", "v ↦ rotation · v + translation")
     _row(t, "translation [m]", _vector(alignment.translation, 0.0))
     _row(t, "principal moments [kg·m²]", _vector(alignment.principal_moments, 0.0))
-    _console.print(t)
+    _print_table(t)
     _console.print(_matrix(alignment.rotation, 0.0, "rotation (rows: principal axes)"))
     if repairs:
         _console.print(_repairs_table({k: r.as_dict() for k, r in repairs.items()}))
@@ -174,7 +187,7 @@ def print_simulation(scene, result) -> None:
              else why_none.get(key, "n/a (not conserved in this scene)"))
     if result.interrupted:
         _row(head, "interrupted", "yes: the results stop at the time above")
-    _console.print(head)
+    _print_table(head)
 
 
 def print_precision(name: str, report) -> None:
@@ -184,7 +197,7 @@ def print_precision(name: str, report) -> None:
               box=None, padding=(0, 2), header_style="bold")
     for col in ("integrator", "rtol | h [s]", "time [s]", "error", "estimate", "steps",
                 "evals"):
-        t.add_column(col, justify="left" if col == "integrator" else "right", no_wrap=True)
+        t.add_column(Text(col), justify="left" if col == "integrator" else "right", no_wrap=True)
     previous = None
     failed = []
     for r in report.runs:
@@ -197,7 +210,7 @@ def print_precision(name: str, report) -> None:
                   f"failed ({len(failed)})" if r.error is None else f"{r.error:.2e}",
                   "—" if r.estimate is None else f"{r.estimate:.2e}", str(r.steps),
                   str(r.evaluations))
-    _console.print(t)
+    _print_table(t)
     for k, why in enumerate(failed, 1):
         _console.print(Text(f"({k}) {why}"))
     acc = ref.get("accuracy")
@@ -211,7 +224,7 @@ def print_model(report, rtol: float | None = None) -> None:
               title_justify="left", box=None, padding=(0, 2), header_style="bold")
     for col in ("link", "mass [kg]", "mass off", "COM off [m]", "of size", "inertia off",
                 "axes [°]", "valid", "check"):
-        t.add_column(col, justify="left" if col == "link" else "right", no_wrap=True)
+        t.add_column(Text(col), justify="left" if col == "link" else "right", no_wrap=True)
     notes = []
     for r in report.links:
         if r.computed is None:
@@ -231,7 +244,7 @@ def print_model(report, rtol: float | None = None) -> None:
         notes.extend(f"{r.name}: {cli_text(w)}" for w in r.warnings)
         notes.extend(f"{r.name}: {mesh}: repaired ({', '.join(rec)})"
                      for mesh, rec in (r.repairs or {}).items())
-    _console.print(t)
+    _print_table(t)
     for n in notes:
         _console.print(Text(n, style="yellow"))
 

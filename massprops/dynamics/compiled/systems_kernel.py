@@ -12,7 +12,7 @@ import numpy as np
 
 from massprops.dynamics.compiled import systems_dop853, systems_fixed
 from massprops.dynamics.compiled.jit import array_kernel
-from massprops.dynamics.compiled.systems_step import OK, workspace
+from massprops.dynamics.compiled.systems_step import OK, rhs, workspace
 from massprops.dynamics.compiled.unowned import unowned
 
 DOP853 = 3
@@ -62,8 +62,10 @@ def stand_in() -> tuple:
 
 
 def warm_up() -> None:
-    """Run one short segment of the `stand_in` system (loads or compiles the kernel)."""
+    """Run one short segment of the `stand_in` system and one right-hand side from Python
+    (`systems_step.rhs`, the stiffness probe's): loads or compiles both."""
     y = np.array([0.1, 0.0])
+    rhs(stand_in(), workspace(stand_in()), 0.0, y, np.zeros(2), -1)
     run_segment(stand_in(), y, 0.0, 1e-3, 1e-6, DOP853, np.ones(2), np.array([0.0, 1e-3]),
                 np.zeros((2, 2)), np.array([0, 0, 0, OK, 1, -1, -1], np.int64),
                 np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]), np.zeros((0, 1)),

@@ -190,25 +190,39 @@ def _build(mech: Mechanism, masses: dict, base: str | None, warnings: list[str],
                                       damping=j.damping, stiffness=j.stiffness, rest=j.rest,
                                       loop=j.loop))
     _check_masses(bodies, sys_joints, heads, path, mech)
+    couplings = _couplings(mech, sys_joints, path, warnings)
     return Description(path, tuple(bodies), tuple(sys_joints), mech.gravity, tuple(warnings),
-                       body_of, _couplings(mech, sys_joints, path))
+                       body_of, couplings)
 
 
-def _couplings(mech: Mechanism, sys_joints: list[SystemJoint], path: Path) -> tuple:
-    """The mechanism's couplings over the system joints (by name; a fixed joint is none)."""
+def _couplings(mech: Mechanism, sys_joints: list[SystemJoint], path: Path,
+               warnings: list[str]) -> tuple:
+    """The mechanism's couplings over the system joints (by name). A fixed joint's coordinate
+    is 0: its term drops out; a coupling whose follower is fixed (a reduced model's welded
+    gripper) has nothing to move and is left out, said in ``warnings``."""
     index = {j.name: k for k, j in enumerate(sys_joints)}
     kinds = {j.name: j.kind for j in mech.joints}
-    out = []
+    out, still = [], []
     for c in mech.couplings:
         where = f"{c.node.file or path}:{c.node.line}: <{c.node.tag}>: "
         terms = []
         for name, coef in c.terms:
-            if name not in index:
-                why = (f"is {kinds[name]}: it has no coordinate" if name in kinds
-                       else "is not a joint of the description; check the spelling")
-                raise RobotModelError(f"{where}{c.name}: joint {name!r} {why}")
-            terms.append((index[name], float(coef)))
+            if name not in kinds:
+                raise RobotModelError(f"{where}{c.name}: joint {name!r} is not a joint of the "
+                                      "description; check the spelling")
+            if kinds[name] != "fixed" and name not in index:
+                raise RobotModelError(f"{where}{c.name}: joint {name!r} is {kinds[name]}: it "
+                                      "has no one coordinate to couple")
+            if name in index:
+                terms.append((index[name], float(coef)))
+        follower = c.terms[0][0]
+        if not terms or terms[0][0] != index.get(follower):
+            still.append(follower)
+            continue
         out.append(JointCoupling(c.name, tuple(terms), float(c.constant), where))
+    if still:
+        warnings.append(f"the couplings (mimic) of fixed joint(s) {', '.join(still[:4])}"
+                        f"{' ...' if len(still) > 4 else ''} are left out: nothing moves them")
     return tuple(out)
 
 

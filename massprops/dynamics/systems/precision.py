@@ -14,6 +14,8 @@ import math
 from collections.abc import Callable, Sequence
 
 from massprops.dynamics.accuracy import global_estimate
+from massprops.dynamics.compiled.compiling import SYSTEMS
+from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
 from massprops.dynamics.precision import (
     AT_REFERENCE,
     MAX_RUN_S,
@@ -78,6 +80,7 @@ def precision_system(scene: SystemScene, integrators: Sequence[str] | None = Non
         names = [n for n in names if n in integrators]
     every = scene.time.duration / SAMPLES
     system, y0, _ = prepare(scene)
+    prepare_kernels([SYSTEMS], notice)  # before `reference_run`'s stiffness probe uses them
     ref, reference = reference_run(scene, every, (system, y0), notice)
     plan = [(n, s) for n in names for s in ladder(scene, n, (system, y0))]
     runs: list[PrecisionRun] = []

@@ -168,9 +168,10 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     duration = scene.time.duration
     if duration == 0:  # the start pose only (a description's static torques)
         return _static(system, y0, notes)
-    name, setting, reason = choose(system, y0, name, rtol, step)
-    # compiled or loaded before the timed run
+    # compiled or loaded before the timed run (and before `choose`, whose stiffness probe
+    # evaluates the compiled right-hand side)
     prepare_kernels([SYSTEMS], notice)
+    name, setting, reason = choose(system, y0, name, rtol, step)
     t_out = sample_times(duration, every if every is not None else scene.output.every,
                          scene.source)
     floors = _floors(system, duration)
