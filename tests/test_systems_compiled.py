@@ -127,3 +127,19 @@ def test_max_steps_bounds_a_system_run():
         simulate_system(scene, rtol=1e-10, max_steps=5, estimate=False)
     assert "took 5 steps" in str(info.value) and "max_steps" in settings_in(info.value.args[0])
     assert simulate_system(scene, rtol=1e-6, max_steps=10_000, estimate=False).steps < 10_000
+
+
+@pytest.mark.parametrize("scene", ["every_kind", "andrews"])
+def test_accelerations_on_made_kinematics_are_the_same_numbers(scene):
+    """`tree.with_accelerations` (the outputs' second pass) gives bit for bit the A of a full
+    `tree.kinematics` pass with the same u̇, at random states of every joint kind."""
+    loaded = (parse_system(EVERY_KIND, source="k.yaml", base_dir=SAMPLES) if scene == "every_kind"
+              else load_system(SAMPLES / f"{scene}.yaml"))
+    system, y0, _ = prepare(loaded)
+    rng = np.random.default_rng(11)
+    for y in _states(system, y0, rng, spread=0.2):
+        q, u = y[:system.nq], y[system.nq:]
+        udot = rng.standard_normal(system.nv)
+        full = tr.kinematics(system.tree, q, u, udot).A
+        assert np.array_equal(tr.with_accelerations(system.tree, tr.kinematics(system.tree, q, u),
+                                                    udot).A, full)

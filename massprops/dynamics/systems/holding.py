@@ -21,8 +21,9 @@ from massprops.dynamics.systems.loops import terms
 
 __all__ = ["LOOP_RULE", "holding"]
 
-LOOP_RULE = ("minimum-norm: the loops' constraint forces take the load the motors need not "
-             "give; the motors' forces are the smallest (Euclidean norm) that hold the pose")
+LOOP_RULE = ("minimum-norm: the constraints' forces (loops, couplings) take the load the motors "
+             "need not give; the motors' forces are the smallest (Euclidean norm) that hold the "
+             "pose")
 
 
 def holding(system, t: float, y: np.ndarray) -> list[np.ndarray]:

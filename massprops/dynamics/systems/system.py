@@ -151,7 +151,7 @@ class System:
                 raise SingularPose(self.singular_message(t, uu[:, ~keep[:uu.shape[1]]]
                                                           if uu.shape[1] else uu))
         udot = chol.solve(rhs)
-        kin = tr.kinematics(self.tree, q, u, udot) if full else kin0
+        kin = tr.with_accelerations(self.tree, kin0, udot) if full else kin0
         return Solution(udot, lam, rank, kin, rho_b, rho_a)
 
     def singular_message(self, t: float, directions: np.ndarray,
