@@ -86,6 +86,8 @@ class _Reader:
             elif child.tag == "attach":
                 raise self.v.error(child, "<attach> is not read as a mechanism yet; expand it "
                                           "(mujoco.MjSpec, mj_saveLastXML) first")
+            elif child.tag in ("composite", "flexcomp"):  # bodies MuJoCo's compiler makes:
+                self.notes.add(f"bodies made by <{child.tag}>, not expanded")  # said, not run
 
     def replicate(self, node: Node, childclass: str, frame, body: str, world) -> None:
         """``count`` copies, each placed by the previous one's pose and `offset`/`euler`, every

@@ -89,13 +89,20 @@ def loop_joint(r, node: Node, k: int) -> RobotJoint | None:
         anchor = v.numbers(node, a.get("anchor", "0 0 0"), "anchor=", 3, 'anchor="0 0 0"')
     for b in (body1, body2):
         if b != WORLD_LINK and b not in r.poses:
-            raise v.error(node, f"no body named {b!r}; check the spelling")
+            raise v.error(node, f"no body named {b!r}; {_unknown_body(r)}")
     name = a.get("name") or f"connect{k}"
     return RobotJoint(name, "spherical", body2, body1, (np.eye(3), anchor), np.zeros((0, 3)),
                       node, loop=True)
 
 
 _SITES_APART = 1e-9  # m: two sites "coincide" as written up to round-off of written numbers
+
+
+def _unknown_body(r) -> str:
+    """The hint for a body name not found: a <composite>'s bodies are not expanded here."""
+    made = [n for n in r.notes if "not expanded" in n]
+    return (f"it may be one of the {made[0].split(',')[0]} (expand the model first: "
+            "mujoco.MjSpec, mj_saveLastXML)" if made else "check the spelling")
 
 
 def _sites(r, node: Node, a: dict):
@@ -131,7 +138,7 @@ def _weld(r, node: Node, a: dict, k: int) -> RobotJoint:
     body1, body2 = a["body1"], a.get("body2", WORLD_LINK)
     for b in (body1, body2):
         if b != WORLD_LINK and b not in r.poses:
-            raise v.error(node, f"no body named {b!r}; check the spelling")
+            raise v.error(node, f"no body named {b!r}; {_unknown_body(r)}")
     if "relpose" in a:
         written = v.numbers(node, a["relpose"], "relpose=", 7, 'relpose="0 1 0 0 0 0 0"')
         if np.any(written[3:]):  # MuJoCo's all-zero quaternion: "the pose as written"
