@@ -205,3 +205,14 @@ def test_a_fixed_joint_in_a_coupling_counts_as_zero(tmp_path):
     samples = simulate_system(scene, rtol=1e-12).samples
     lead, t = samples.coordinates[0][:, 0], samples.t
     assert np.abs(lead - 0.5 * (0.7 / 0.2) * t ** 2).max() <= 1e-9  # wheel1 alone
+
+
+def test_an_mjcf_joint_equality_without_joint2_holds_the_joint(tmp_path):
+    """<joint joint1> alone: y − y0 = a0, the joint held at a0 from its ref; the other wheel then
+    turns alone under the torque (α = τ / I₁)."""
+    robot = MJCF.format(equality='<joint joint1="follow" polycoef="0.3 0 0 0 0"/>', ref="0.4")
+    scene = load_any_system(_scene(tmp_path, robot, body="wheel1", name="h.xml"))
+    s = simulate_system(scene, rtol=1e-12).samples
+    lead, follow = s.coordinates[0][:, 0], s.coordinates[1][:, 0]
+    assert np.abs(follow - 0.3).max() <= 1e-13
+    assert np.abs(lead - 0.5 * (0.7 / 0.2) * s.t ** 2).max() <= 1e-10 * 0.5 * 3.5 * s.t[-1] ** 2
