@@ -76,7 +76,9 @@ def plot_system(result, path: str | Path, *, force: bool = False, protect=()) ->
                 mech.plot(*seg.T, color=(0, 0, 0, shade), lw=1.5)
     for k, joint in enumerate(result.scene.joints):
         path_k = np.array([view(p) for p in s.joint_points[:, k]])
-        mech.plot(*path_k.T, lw=0.8, label=joint.name)
+        # the end marked: a joint that stays put (an axle, a fixed pivot) is a dot, not nothing
+        mech.plot(*path_k.T, lw=0.8, label=joint.name, marker="o", ms=3,
+                  markevery=[len(path_k) - 1])
     mech.set_title("mechanism (seen along its plane's normal)" if planar else "mechanism (3-D)")
     if planar:
         mech.set_aspect("equal", adjustable="datalim")
