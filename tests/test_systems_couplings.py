@@ -216,3 +216,18 @@ def test_an_mjcf_joint_equality_without_joint2_holds_the_joint(tmp_path):
     lead, follow = s.coordinates[0][:, 0], s.coordinates[1][:, 0]
     assert np.abs(follow - 0.3).max() <= 1e-13
     assert np.abs(lead - 0.5 * (0.7 / 0.2) * s.t ** 2).max() <= 1e-10 * 0.5 * 3.5 * s.t[-1] ** 2
+
+
+def test_a_mimic_joint_has_no_motor_its_leader_holds_both(tmp_path):
+    """Holding forces (static torques) of two pendulums, one mimicking the other: the mimic
+    joint has no motor (0), the leader's holds both, twice the single pendulum's own (whose
+    closed form is m g x at the horizontal start)."""
+    results = []
+    for name, coupled in (("one.urdf", False), ("two.urdf", True)):
+        (tmp_path / name).write_text(_pendulums(coupled))
+        results.append(simulate_system(load_any_system(tmp_path / name, duration=0.0)))
+    one, two = results
+    single = one.holding[0][0]
+    assert abs(abs(single) - 1.5 * 9.81 * 0.4) <= 1e-12 * 6
+    assert two.holding[0][0] == pytest.approx(2 * single, rel=1e-13)
+    assert abs(two.holding[1][0]) <= 1e-13

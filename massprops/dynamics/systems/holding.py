@@ -8,8 +8,10 @@ On a tree G is empty and the answer is unique. With closed loops λ is free: the
 carry part of the load; massprops takes the λ that makes the motors' forces smallest in the
 Euclidean norm over the tree coordinates that are joints of the scene (a floating base's six
 are excluded: nothing actuates them, what remains there is the wrench a support must give), and
-says so in the output. Cut joints hold nothing (their entries are zeros). Units: N·m for a turn,
-N for a shift, one per rate coordinate, in the contract's signs (the scene joint's own).
+says so in the output. A coupling's follower (a mimic joint) has no motor: its coupling carries
+its whole load to the leaders, and its entry is zero. Cut joints hold nothing (their entries are
+zeros). Units: N·m for a turn, N for a shift, one per rate coordinate, in the contract's signs
+(the scene joint's own).
 """
 
 from __future__ import annotations
@@ -21,9 +23,27 @@ from massprops.dynamics.systems.loops import terms
 
 __all__ = ["LOOP_RULE", "holding"]
 
-LOOP_RULE = ("minimum-norm: the constraints' forces (loops, couplings) take the load the motors "
-             "need not give; the motors' forces are the smallest (Euclidean norm) that hold the "
-             "pose")
+LOOP_RULE = ("minimum-norm: the loops' constraint forces take the load the motors need not "
+             "give; the motors' forces are the smallest (Euclidean norm) that hold the pose (a "
+             "mimic joint's is 0: its coupling carries its load)")
+
+
+def _multipliers(g: np.ndarray, motor: np.ndarray, act: np.ndarray,
+                 passive: np.ndarray) -> np.ndarray:
+    """λ with (Gᵀλ)[passive] = motor[passive] (a coupling's follower has no motor: the coupling
+    carries its whole load) and ‖motor − Gᵀλ‖ over ``act`` the least: the minimum-norm λ0 of
+    the first, then the least squares in the null space of G[:, passive]ᵀ."""
+    lam = np.zeros(g.shape[0])
+    basis = np.eye(g.shape[0])
+    if passive.size:
+        lam = np.linalg.lstsq(g[:, passive].T, motor[passive], rcond=None)[0]
+        _, sv, vt = np.linalg.svd(g[:, passive].T)
+        rank = int(np.sum(sv > 1e-12 * (sv[0] if sv.size else 0.0)))
+        basis = vt[rank:].T
+    if act.size and basis.shape[1]:
+        rest = motor[act] - g[:, act].T @ lam
+        lam = lam + basis @ np.linalg.lstsq(g[:, act].T @ basis, rest, rcond=None)[0]
+    return lam
 
 
 def holding(system, t: float, y: np.ndarray) -> list[np.ndarray]:
@@ -39,11 +59,11 @@ def holding(system, t: float, y: np.ndarray) -> list[np.ndarray]:
     if system.m:
         g = terms(tree.prims, kin, tr.jacobians(tree, kin), system.nv, tree.size,
                   tree.couplings, q)[1]
+        followers = {c.terms[0][1] for c in tree.couplings}
         act = np.array([i for j in tree.joints if j.kind != "free"
-                        for i in range(j.iu, j.iu + j.nv)], dtype=int)
-        if act.size:
-            lam = np.linalg.lstsq(g[:, act].T, motor[act], rcond=None)[0]
-            motor = motor - g.T @ lam
+                        for i in range(j.iu, j.iu + j.nv) if i not in followers], dtype=int)
+        lam = _multipliers(g, motor, act, np.array(sorted(followers), dtype=int))
+        motor = motor - g.T @ lam
     out = []
     for k, sj in enumerate(scene.joints):
         where, n = tree.of_scene[k]

@@ -233,12 +233,8 @@ def _holding(system: System, y: np.ndarray, notes: list[str]) -> list | None:
     # deferred: only a description reports it
     from massprops.dynamics.systems.holding import LOOP_RULE, holding
 
-    if system.m:
-        held = " and couplings" if system.tree.couplings else ""
-        if system.tree.prims:
-            held = "closed loops" + held
-        notes.append(f"{system.scene.source}: holding forces with {held.removeprefix(' and ')}: "
-                     f"{LOOP_RULE}")
+    if system.tree.prims:  # a coupling alone leaves no choice (holding.py): nothing to say
+        notes.append(f"{system.scene.source}: holding forces with closed loops: {LOOP_RULE}")
     if system.falling is not None:  # holding is against the weight: the world frame's system
         system = System(system.scene, system.tree, system.origin)
     return holding(system, system.scene.time.duration, y)
