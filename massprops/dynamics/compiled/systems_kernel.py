@@ -64,9 +64,9 @@ def stand_in() -> tuple:
 def warm_up() -> None:
     """Run one short segment of the `stand_in` system and one right-hand side from Python
     (`systems_step.rhs`, the stiffness probe's): loads or compiles both."""
-    y = np.array([0.1, 0.0])
-    rhs(stand_in(), workspace(stand_in()), 0.0, y, np.zeros(2), -1)
-    run_segment(stand_in(), y, 0.0, 1e-3, 1e-6, DOP853, np.ones(2), np.array([0.0, 1e-3]),
+    y, prog = np.array([0.1, 0.0]), stand_in()
+    rhs(prog, workspace(prog), 0.0, y, np.zeros(2), -1)
+    run_segment(prog, y, 0.0, 1e-3, 1e-6, DOP853, np.ones(2), np.array([0.0, 1e-3]),
                 np.zeros((2, 2)), np.array([0, 0, 0, OK, 1, -1, -1], np.int64),
                 np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]), np.zeros((0, 1)),
                 np.zeros((0, 1)), 1000, np.zeros(2))

@@ -26,7 +26,7 @@ from massprops.robot.formats.values import Values
 from massprops.robot.formats.xmltree import Node
 
 __all__ = ["KINDS", "WORLD_LINK", "Mechanism", "RobotCoupling", "RobotJoint", "compose",
-           "mark_loops", "poses_from_tree"]
+           "mark_loops", "mimic", "poses_from_tree"]
 
 Pose = tuple[np.ndarray, np.ndarray]
 WORLD_LINK = "world"
@@ -77,6 +77,17 @@ class RobotCoupling:
     terms: tuple
     constant: float
     node: Node
+
+
+def mimic(v: Values, node: Node, follower: str, leader: str | None, gain: float,
+          constant: float) -> RobotCoupling:
+    """A ``<mimic>`` (URDF, SDF 1.11): follower = gain × leader + constant; refuses one
+    without the joint it follows, at ``node``."""
+    if not leader:
+        raise v.error(node, f'joint {follower!r}: <mimic> needs joint="..." (the joint it '
+                            "follows)")
+    return RobotCoupling(f"{follower} mimics {leader}", ((follower, 1.0), (leader, -gain)),
+                         constant, node)
 
 
 @dataclass(frozen=True, eq=False)

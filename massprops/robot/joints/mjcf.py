@@ -63,6 +63,7 @@ class _Reader:
         self.joints: list[RobotJoint] = []
         self.floating: set = set()
         self.notes: set = set()
+        self.generated: list[str] = []  # <composite>/<flexcomp> met: their bodies not expanded
         self.refs: list[str] = []
         self.suffix = ""  # the name suffix inside <replicate> copies
         self.sites: dict = {}  # name -> (body, point in the model frame at the zero pose)
@@ -88,6 +89,7 @@ class _Reader:
                                           "(mujoco.MjSpec, mj_saveLastXML) first")
             elif child.tag in ("composite", "flexcomp"):  # bodies MuJoCo's compiler makes:
                 self.notes.add(f"bodies made by <{child.tag}>, not expanded")  # said, not run
+                self.generated.append(child.tag)
 
     def replicate(self, node: Node, childclass: str, frame, body: str, world) -> None:
         """``count`` copies, each placed by the previous one's pose and `offset`/`euler`, every

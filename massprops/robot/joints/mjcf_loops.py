@@ -100,9 +100,8 @@ _SITES_APART = 1e-9  # m: two sites "coincide" as written up to round-off of wri
 
 def _unknown_body(r) -> str:
     """The hint for a body name not found: a <composite>'s bodies are not expanded here."""
-    made = [n for n in r.notes if "not expanded" in n]
-    return (f"it may be one of the {made[0].split(',')[0]} (expand the model first: "
-            "mujoco.MjSpec, mj_saveLastXML)" if made else "check the spelling")
+    return (f"it may be one of the bodies made by <{r.generated[0]}> (expand the model first: "
+            "mujoco.MjSpec, mj_saveLastXML)" if r.generated else "check the spelling")
 
 
 def _sites(r, node: Node, a: dict):

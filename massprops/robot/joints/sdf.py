@@ -32,6 +32,7 @@ from massprops.robot.joints.frames import (
     compose,
     inverse,
     mark_loops,
+    mimic,
     unit_axis,
 )
 
@@ -171,9 +172,9 @@ def _joint(node: Node, scopes: tuple[str, str], graph: _FrameGraph, v: Values, v
         axes.append(in_model[0].T @ _axis_in_model(axis, xyz_el, xyz, graph, in_model, v,
                                                     version))
         axes[-1] = unit_axis(v, xyz_el, axes[-1])
-        mimic = axis.find("mimic")
-        if mimic is not None:
-            couplings.append(_mimic(mimic, prefix + name, prefix, v))
+        tag = axis.find("mimic")
+        if tag is not None:
+            couplings.append(_mimic(tag, prefix + name, prefix, v))
         limit = axis.find("limit")
         lo = _number(limit, "lower", v)
         hi = _number(limit, "upper", v)
@@ -191,17 +192,13 @@ def _joint(node: Node, scopes: tuple[str, str], graph: _FrameGraph, v: Values, v
                       tuple(limits) if limits else None, damping)
 
 
-def _mimic(mimic: Node, follower: str, prefix: str, v: Values) -> RobotCoupling:
-    leader = mimic.attrs.get("joint")
-    if not leader:
-        raise v.error(mimic, f'joint {follower!r}: <mimic> needs joint="..." (the joint it '
-                             "follows)")
-    values = {tag: _number(mimic, tag, v) for tag in ("multiplier", "offset", "reference")}
+def _mimic(tag: Node, follower: str, prefix: str, v: Values) -> RobotCoupling:
+    """SDF's follower = multiplier (leader − reference) + offset, as `frames.mimic`."""
+    values = {name: _number(tag, name, v) for name in ("multiplier", "offset", "reference")}
     gain = 1.0 if values["multiplier"] is None else values["multiplier"]
-    offset, reference = values["offset"] or 0.0, values["reference"] or 0.0
-    return RobotCoupling(f"{follower} mimics {prefix + leader}",
-                         ((follower, 1.0), (prefix + leader, -gain)), offset - gain * reference,
-                         mimic)
+    leader = tag.attrs.get("joint")
+    return mimic(v, tag, follower, leader and prefix + leader, gain,
+                 (values["offset"] or 0.0) - gain * (values["reference"] or 0.0))
 
 
 def _axis_in_model(axis: Node, xyz_el: Node, xyz: np.ndarray, graph: _FrameGraph, in_model,

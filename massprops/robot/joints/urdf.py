@@ -12,8 +12,8 @@ from massprops.robot.formats.xmltree import Node
 from massprops.robot.joints.frames import (
     IDENTITY,
     Mechanism,
-    RobotCoupling,
     RobotJoint,
+    mimic,
     poses_from_tree,
     unit_axis,
 )
@@ -63,16 +63,10 @@ def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
             damping = v.positive(dyn, "damping", v.number(dyn, "damping", 0.0), allow_zero=True)
             if v.number(dyn, "friction", 0.0):
                 notes.add("joint friction")
-        mimic = node.find("mimic")
-        if mimic is not None:
-            leader = mimic.attrs.get("joint")
-            if not leader:
-                raise v.error(mimic, f'joint {name!r}: <mimic> needs joint="..." (the joint '
-                                     "it follows)")
-            couplings.append(RobotCoupling(
-                f"{name} mimics {leader}", ((name, 1.0), (leader, -v.number(mimic, "multiplier",
-                                                                            1.0))),
-                v.number(mimic, "offset", 0.0), mimic))
+        tag = node.find("mimic")
+        if tag is not None:
+            couplings.append(mimic(v, tag, name, tag.attrs.get("joint"),
+                                   v.number(tag, "multiplier", 1.0), v.number(tag, "offset", 0.0)))
         if kind == "planar":
             _planar(name, parent, child, pose, axes[0], node, joints, tree)
             continue
