@@ -13,36 +13,34 @@ from __future__ import annotations
 
 from massprops.dynamics.compiled.jit import array_inner, inlined
 from massprops.dynamics.compiled.systems_linalg import cholesky, lower_solve, upper_solve
-from massprops.dynamics.compiled.systems_tree import force_cross
+from massprops.dynamics.compiled.systems_tree import INERTIA_SIZE, spatial_matrix, spatial_times
 from massprops.dynamics.compiled.unowned import at
 
 
 @inlined
-def _net(vel, sp, fext, i, out, iv):
-    """out = V_i ×f (I_i V_i) − f_ext,i (iv scratch 6)."""
-    for r in range(6):
-        s = 0.0
-        for c in range(6):
-            s += sp[i, r, c] * vel[i, c]
-        iv[r] = s
-    force_cross(vel[i], iv, out)
-    for r in range(6):
-        out[r] -= fext[i, r]
+def _net(vel, inert, fext, i, out):
+    """out = V_i ×f (I_i V_i) − f_ext,i."""
+    v0, v1, v2, v3, v4, v5 = vel[i, 0], vel[i, 1], vel[i, 2], vel[i, 3], vel[i, 4], vel[i, 5]
+    f0, f1, f2, f3, f4, f5 = spatial_times(inert[i], v0, v1, v2, v3, v4, v5)
+    out[0] = v1 * f2 - v2 * f1 + v4 * f5 - v5 * f4 - fext[i, 0]
+    out[1] = v2 * f0 - v0 * f2 + v5 * f3 - v3 * f5 - fext[i, 1]
+    out[2] = v0 * f1 - v1 * f0 + v3 * f4 - v4 * f3 - fext[i, 2]
+    out[3] = v1 * f5 - v2 * f4 - fext[i, 3]
+    out[4] = v2 * f3 - v0 * f5 - fext[i, 4]
+    out[5] = v0 * f4 - v1 * f3 - fext[i, 5]
 
 
 @array_inner
 def aba(pp, wp, udot):
     """udot (nv,) = M⁻¹ (τ − h) of a tree without loops."""
     ji = at(pp, 1)
-    acc, sp, s, cb, tau = at(wp, 3), at(wp, 4), at(wp, 5), at(wp, 7), at(wp, 12)
+    acc, inert, s, cb, tau = at(wp, 3), at(wp, 4), at(wp, 5), at(wp, 7), at(wp, 12)
     ia, pa, uu, dinv, un = at(wp, 13), at(wp, 14), at(wp, 15), at(wp, 16), at(wp, 17)
     v6, m6 = at(wp, 10), at(wp, 18)
-    n = sp.shape[0]
+    n = inert.shape[0]
     for i in range(n):
-        for r in range(6):
-            for c in range(6):
-                ia[i, r, c] = sp[i, r, c]
-        _net(at(wp, 2), at(wp, 4), at(wp, 11), i, pa[i], v6[0])
+        spatial_matrix(inert[i], ia[i])
+        _net(at(wp, 2), inert, at(wp, 11), i, pa[i])
     low, tmp = m6[0], m6[1]
     for k in range(ji.shape[0] - 1, -1, -1):
         par, ch, iu, nvj = ji[k, 1], ji[k, 2], ji[k, 4], ji[k, 6]
@@ -123,13 +121,13 @@ def bias(pp, wp, h):
     """h (nv,) = Sᵀ of the transmitted forces I A₀ + V ×f I V − f_ext summed over each
     subtree (RNEA at u̇ = 0); uses the kinematics' A (u̇ = 0)."""
     ji = at(pp, 1)
-    acc, sp, s, pa, v6 = at(wp, 3), at(wp, 4), at(wp, 5), at(wp, 14), at(wp, 10)
-    n = sp.shape[0]
-    for i in range(n):
-        _net(at(wp, 2), at(wp, 4), at(wp, 11), i, pa[i], v6[0])
+    acc, inert, s, pa = at(wp, 3), at(wp, 4), at(wp, 5), at(wp, 14)
+    for i in range(inert.shape[0]):
+        _net(at(wp, 2), inert, at(wp, 11), i, pa[i])
+        f = spatial_times(inert[i], acc[i, 0], acc[i, 1], acc[i, 2], acc[i, 3], acc[i, 4],
+                          acc[i, 5])
         for r in range(6):
-            for c in range(6):
-                pa[i, r] += sp[i, r, c] * acc[i, c]
+            pa[i, r] += f[r]
     for k in range(ji.shape[0] - 1, -1, -1):
         par, ch = ji[k, 1], ji[k, 2]
         if par >= 0:
@@ -146,35 +144,32 @@ def bias(pp, wp, h):
 
 @array_inner
 def crba(pp, wp, mass):
-    """mass (nv, nv) = the joint-space mass matrix (composite rigid bodies)."""
+    """mass (nv, nv) = the joint-space mass matrix (composite rigid bodies, each composite as
+    the ten numbers of `systems_tree.INERTIA_SIZE`: sums of masses, first moments and inertias
+    about O are the composite's)."""
     ji, pjoint = at(pp, 1), at(pp, 6)
-    sp, s, comp, v6 = at(wp, 4), at(wp, 5), at(wp, 13), at(wp, 10)
-    n = sp.shape[0]
-    for i in range(n):
-        for r in range(6):
-            for c in range(6):
-                comp[i, r, c] = sp[i, r, c]
+    inert, s, comp, v6 = at(wp, 4), at(wp, 5), at(wp, 41), at(wp, 10)
+    for i in range(inert.shape[0]):
+        for r in range(INERTIA_SIZE):
+            comp[i, r] = inert[i, r]
     for k in range(ji.shape[0] - 1, -1, -1):
         par, ch = ji[k, 1], ji[k, 2]
         if par >= 0:
-            for r in range(6):
-                for c in range(6):
-                    comp[par, r, c] += comp[ch, r, c]
+            for r in range(INERTIA_SIZE):
+                comp[par, r] += comp[ch, r]
     f = v6[0]
     for k in range(ji.shape[0]):
         ch, iu, nvj = ji[k, 2], ji[k, 4], ji[k, 6]
         for a in range(nvj):
-            for r in range(6):
-                x = 0.0
-                for c in range(6):
-                    x += comp[ch, r, c] * s[c, iu + a]
-                f[r] = x
+            c = iu + a
+            f[0], f[1], f[2], f[3], f[4], f[5] = spatial_times(
+                comp[ch], s[0, c], s[1, c], s[2, c], s[3, c], s[4, c], s[5, c])
             anc = k
             while anc >= 0:  # this joint, then its ancestors: M[anc dofs, iu + a]
                 for b in range(ji[anc, 6]):
                     x = 0.0
                     for r in range(6):
                         x += s[r, ji[anc, 4] + b] * f[r]
-                    mass[ji[anc, 4] + b, iu + a] = x
-                    mass[iu + a, ji[anc, 4] + b] = x
+                    mass[ji[anc, 4] + b, c] = x
+                    mass[c, ji[anc, 4] + b] = x
                 anc = pjoint[ji[anc, 1]] if ji[anc, 1] >= 0 else -1

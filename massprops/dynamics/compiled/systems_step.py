@@ -20,7 +20,7 @@ from massprops.dynamics.compiled.systems_loops import (
     factor,
     min_norm,
 )
-from massprops.dynamics.compiled.systems_tree import FREE, SPHERICAL, kinematics
+from massprops.dynamics.compiled.systems_tree import FREE, INERTIA_SIZE, SPHERICAL, kinematics
 from massprops.dynamics.compiled.unowned import at, by_ref
 
 UNDERFLOW, STEP_LIMIT, CROSSED, UNCLOSED = 1, 2, 4, 5
@@ -39,7 +39,8 @@ def workspace(prog):
     p, kk = max(m, nv), min(m, nv)
     nqc = nq if prog[23].shape[0] else 0  # the coordinates, kept only for couplings' rows
     return (np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 6)), np.zeros((n, 6)),  # 0-3
-            np.zeros((n, 6, 6)), np.zeros((6, nv)), np.zeros((nj, 3)), np.zeros((n, 6)),  # 4-7
+            np.zeros((n, INERTIA_SIZE)), np.zeros((6, nv)), np.zeros((nj, 3)),  # 4-6
+            np.zeros((n, 6)),  # 7
             np.zeros((4, 3, 3)), np.zeros((16, 3)), np.zeros((6, 6)), np.zeros((n, 6)),  # 8-11
             np.zeros(nv), np.zeros((n, 6, 6)), np.zeros((n, 6)), np.zeros(nv),  # 12-15
             np.zeros((nj, 6, 6)), np.zeros((nj, 6, 6)), np.zeros((2, 6, 6)), np.zeros(m),  # 16-19
@@ -48,7 +49,7 @@ def workspace(prog):
             np.zeros((p, p)), np.zeros(p), np.zeros(1 + p, dtype=np.int64),  # 28-30
             np.zeros((m, kk)), np.zeros((nv, kk)), np.zeros(nv), np.zeros(nqc),  # 31-34
             np.zeros(nv), np.zeros(m), np.zeros(max(nq, nv)), np.zeros(nq + nv),  # 35-38
-            np.zeros(1 + p, dtype=np.int64), np.zeros(p))  # 39-40
+            np.zeros(1 + p, dtype=np.int64), np.zeros(p), np.zeros((n, INERTIA_SIZE)))  # 39-41
 
 
 @array_jit

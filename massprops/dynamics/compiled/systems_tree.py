@@ -80,24 +80,13 @@ def motion_cross(v, m, out):
 
 
 @inlined
-def force_cross(v, f, out):
-    """out = v ×f f (a spatial motion v, a force f = (n_O, f)), out not v or f."""
-    out[0] = v[1] * f[2] - v[2] * f[1] + v[4] * f[5] - v[5] * f[4]
-    out[1] = v[2] * f[0] - v[0] * f[2] + v[5] * f[3] - v[3] * f[5]
-    out[2] = v[0] * f[1] - v[1] * f[0] + v[3] * f[4] - v[4] * f[3]
-    out[3] = v[1] * f[5] - v[2] * f[4]
-    out[4] = v[2] * f[3] - v[0] * f[5]
-    out[5] = v[0] * f[4] - v[1] * f[3]
-
-
-@inlined
-def _column(s, col, w, p, turning):
+def _column(s, col, w, px, py, pz, turning):
     """S column ``col``: a turn about w through p, (w, p × w), or a shift along w, (0, w)."""
     if turning:
         s[0, col], s[1, col], s[2, col] = w[0], w[1], w[2]
-        s[3, col] = p[1] * w[2] - p[2] * w[1]
-        s[4, col] = p[2] * w[0] - p[0] * w[2]
-        s[5, col] = p[0] * w[1] - p[1] * w[0]
+        s[3, col] = py * w[2] - pz * w[1]
+        s[4, col] = pz * w[0] - px * w[2]
+        s[5, col] = px * w[1] - py * w[0]
     else:
         s[0, col] = s[1, col] = s[2, col] = 0.0
         s[3, col], s[4, col], s[5, col] = w[0], w[1], w[2]
@@ -106,35 +95,37 @@ def _column(s, col, w, p, turning):
 @array_inner
 def kinematics(pp, q, u, wp):
     """Per body: R, com, V and A at u̇ = 0 (with the joint's own bias term in ``cb``), the
-    spatial inertia about O; per dof a column of S; per joint its point (world); q itself
-    where the system has couplings (ws[34], for `systems_loops.terms`)."""
+    inertia about O (`inertia_about_origin`'s ten numbers); per dof a column of S; per joint
+    its point (world); q itself where the system has couplings (ws[34], for
+    `systems_loops.terms`). The parent's pose and motion are read into scalars once per joint,
+    not copied into scratch arrays: a store to one float array may alias a load from another,
+    so each copied value was reloaded at every use (measured on the four-bar: 733 → ~510 ns)."""
     ji, jaxes, jsp, jsc, jrp0 = at(pp, 1), at(pp, 2), at(pp, 3), at(pp, 4), at(pp, 5)
     bmass, binertia, brot0, bcom0 = at(pp, 7), at(pp, 8), at(pp, 9), at(pp, 10)
     rot, com, vel, acc = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3)
-    sp, s, pts, cb = at(wp, 4), at(wp, 5), at(wp, 6), at(wp, 7)
+    inert, s, pts, cb = at(wp, 4), at(wp, 5), at(wp, 6), at(wp, 7)
     m3, v3, v6 = at(wp, 8), at(wp, 9), at(wp, 10)
     carry, qm, tmp, rp = m3[0], m3[1], m3[2], m3[3]
-    d, p, w, cp = v3[0], v3[1], v3[2], v3[3]
-    vp, ap, su, b2, c0, c1 = v6[0], v6[1], v6[2], v6[3], v6[4], v6[5]
+    d, w = v3[0], v3[2]
+    c0, c1, su = v6[4], v6[5], v6[2]
     qc = at(wp, 34)  # the coordinates, for the couplings' rows (sized 0 without couplings)
     for i in range(qc.size):
         qc[i] = q[i]
     for k in range(ji.shape[0]):
         kind, par, ch, iq, iu, nvj = ji[k, 0], ji[k, 1], ji[k, 2], ji[k, 3], ji[k, 4], ji[k, 6]
-        for i in range(3):
-            cp[i] = com[par, i] if par >= 0 else 0.0
-            for j in range(3):
-                rp[i, j] = rot[par, i, j] if par >= 0 else (1.0 if i == j else 0.0)
-        for i in range(6):
-            vp[i] = vel[par, i] if par >= 0 else 0.0
-            ap[i] = acc[par, i] if par >= 0 else 0.0
-            b2[i] = 0.0
-        if kind == FREE:
+        if par >= 0:
+            v0, v1, v2, v3_, v4, v5 = vel[par, 0], vel[par, 1], vel[par, 2], vel[par, 3], \
+                vel[par, 4], vel[par, 5]
+            e0, e1, e2, e3, e4, e5 = acc[par, 0], acc[par, 1], acc[par, 2], acc[par, 3], \
+                acc[par, 4], acc[par, 5]
+        else:
+            v0 = v1 = v2 = v3_ = v4 = v5 = 0.0
+            e0 = e1 = e2 = e3 = e4 = e5 = 0.0
+        if kind == FREE:  # the world's child: V = S u, its bias ω × v
             quat_into(qm, q, iq + 3)
             mm3(qm, brot0[ch], rot[ch], False)
-            for i in range(3):
-                com[ch, i] = bcom0[ch, i] + q[iq + i]
-                p[i] = com[ch, i]
+            px, py, pz = bcom0[ch, 0] + q[iq], bcom0[ch, 1] + q[iq + 1], bcom0[ch, 2] + q[iq + 2]
+            com[ch, 0], com[ch, 1], com[ch, 2] = px, py, pz
             for c in range(6):
                 for i in range(6):
                     s[i, iu + c] = 0.0
@@ -142,105 +133,158 @@ def kinematics(pp, q, u, wp):
                 s[3 + i, iu + i] = 1.0
                 for j in range(3):
                     w[j] = 1.0 if i == j else 0.0
-                _column(s, iu + 3 + i, w, p, True)
-            cross_into(w, u[iu:iu + 3], u[iu + 3:iu + 6])
-            b2[3], b2[4], b2[5] = w[0], w[1], w[2]
+                _column(s, iu + 3 + i, w, px, py, pz, True)
+            b0 = b1 = b2 = 0.0
+            b3 = u[iu + 1] * u[iu + 5] - u[iu + 2] * u[iu + 4]
+            b4 = u[iu + 2] * u[iu + 3] - u[iu] * u[iu + 5]
+            b5 = u[iu] * u[iu + 4] - u[iu + 1] * u[iu + 3]
         else:
-            mm3(rp, jrp0[k], carry, True)
-            for i in range(3):
-                d[i] = 0.0
+            jr = jrp0[k]
+            if par >= 0:  # the joint frame in the world, and the joint point
+                pr = rot[par]
+                mm3(pr, jr, carry, True)
+                px = com[par, 0] + pr[0, 0] * jsp[k, 0] + pr[0, 1] * jsp[k, 1] \
+                    + pr[0, 2] * jsp[k, 2]
+                py = com[par, 1] + pr[1, 0] * jsp[k, 0] + pr[1, 1] * jsp[k, 1] \
+                    + pr[1, 2] * jsp[k, 2]
+                pz = com[par, 2] + pr[2, 0] * jsp[k, 0] + pr[2, 1] * jsp[k, 1] \
+                    + pr[2, 2] * jsp[k, 2]
+            else:
+                for i in range(3):
+                    for j in range(3):
+                        carry[i, j] = jr[j, i]
+                px, py, pz = jsp[k, 0], jsp[k, 1], jsp[k, 2]
             a0, a1 = jaxes[k, 0], jaxes[k, 1]
+            turned = True
             if kind == REVOLUTE or kind == CYLINDRICAL:
                 rot_into(qm, a0, q[iq])
-                if kind == CYLINDRICAL:
-                    for i in range(3):
-                        d[i] = q[iq + 1] * a0[i]
             elif kind == UNIVERSAL:
                 rot_into(tmp, a0, q[iq])
-                rot_into(qm, a1, q[iq + 1])
-                mm3(tmp, qm, rp, False)  # rp is free again: R(a0, q0) R(a1, q1)
-                for i in range(3):
-                    for j in range(3):
-                        qm[i, j] = rp[i, j]
+                rot_into(rp, a1, q[iq + 1])
+                mm3(tmp, rp, qm, False)  # R(a0, q0) R(a1, q1)
             elif kind == SPHERICAL:
                 quat_into(qm, q, iq)
-            else:  # prismatic, fixed
-                for i in range(3):
-                    for j in range(3):
-                        qm[i, j] = 1.0 if i == j else 0.0
-                if kind == PRISMATIC:
-                    for i in range(3):
-                        d[i] = q[iq] * a0[i]
-            mm3(carry, qm, rp, False)
-            mm3(rp, brot0[ch], rot[ch], False)
+            else:  # prismatic, fixed: the child turns with the joint frame
+                turned = False
+            if kind == PRISMATIC or kind == CYLINDRICAL:  # the shift q a along the frame's a
+                x = q[iq + 1] if kind == CYLINDRICAL else q[iq]
+                px += x * (carry[0, 0] * a0[0] + carry[0, 1] * a0[1] + carry[0, 2] * a0[2])
+                py += x * (carry[1, 0] * a0[0] + carry[1, 1] * a0[1] + carry[1, 2] * a0[2])
+                pz += x * (carry[2, 0] * a0[0] + carry[2, 1] * a0[1] + carry[2, 2] * a0[2])
+            if turned:
+                mm3(carry, qm, rp, False)
+                mm3(rp, brot0[ch], rot[ch], False)
+            else:
+                mm3(carry, brot0[ch], rot[ch], False)
+            rc = rot[ch]
             for i in range(3):
-                p[i] = cp[i]
-                for j in range(3):
-                    p[i] += (rot[par, i, j] if par >= 0 else (1.0 if i == j else 0.0)) * jsp[k, j] \
-                        + carry[i, j] * d[j]
-            for i in range(3):
-                com[ch, i] = p[i]
-                for j in range(3):
-                    com[ch, i] -= rot[ch, i, j] * jsc[k, j]
+                com[ch, i] = (px if i == 0 else (py if i == 1 else pz)) - rc[i, 0] * jsc[k, 0] \
+                    - rc[i, 1] * jsc[k, 1] - rc[i, 2] * jsc[k, 2]
             if kind == SPHERICAL:
                 for c in range(3):
                     for i in range(3):
                         w[i] = carry[i, c]
-                    _column(s, iu + c, w, p, True)
+                    _column(s, iu + c, w, px, py, pz, True)
             elif kind != FIXED:
                 for i in range(3):
                     w[i] = carry[i, 0] * a0[0] + carry[i, 1] * a0[1] + carry[i, 2] * a0[2]
-                _column(s, iu, w, p, kind != PRISMATIC)
+                _column(s, iu, w, px, py, pz, kind != PRISMATIC)
                 if kind == CYLINDRICAL:
-                    _column(s, iu + 1, w, p, False)
+                    _column(s, iu + 1, w, px, py, pz, False)
                 elif kind == UNIVERSAL:
                     for i in range(3):
                         d[i] = tmp[i, 0] * a1[0] + tmp[i, 1] * a1[1] + tmp[i, 2] * a1[2]
                     for i in range(3):
                         w[i] = carry[i, 0] * d[0] + carry[i, 1] * d[1] + carry[i, 2] * d[2]
-                    _column(s, iu + 1, w, p, True)
-            for i in range(6):
-                su[i] = 0.0
-                for c in range(nvj):
-                    su[i] += s[i, iu + c] * u[iu + c]
-            motion_cross(vp, su, b2)
-            if kind == UNIVERSAL:
+                    _column(s, iu + 1, w, px, py, pz, True)
+        m0 = m1 = m2 = m3_ = m4 = m5 = 0.0  # the joint's motion S u
+        for c in range(nvj):
+            x = u[iu + c]
+            m0 += s[0, iu + c] * x
+            m1 += s[1, iu + c] * x
+            m2 += s[2, iu + c] * x
+            m3_ += s[3, iu + c] * x
+            m4 += s[4, iu + c] * x
+            m5 += s[5, iu + c] * x
+        if kind != FREE:  # the bias V_parent ×m S u
+            b0 = v1 * m2 - v2 * m1
+            b1 = v2 * m0 - v0 * m2
+            b2 = v0 * m1 - v1 * m0
+            b3 = v4 * m2 - v5 * m1 + v1 * m5 - v2 * m4
+            b4 = v5 * m0 - v3_ * m2 + v2 * m3_ - v0 * m5
+            b5 = v3_ * m1 - v4 * m0 + v0 * m4 - v1 * m3_
+            if kind == UNIVERSAL:  # and the first column's motion ×m the second's
                 for i in range(6):
                     c0[i] = s[i, iu] * u[iu]
                     su[i] = s[i, iu + 1] * u[iu + 1]
                 motion_cross(c0, su, c1)
-                for i in range(6):
-                    b2[i] += c1[i]
-        for i in range(3):
-            pts[k, i] = p[i]
-        for i in range(6):
-            v = vp[i]
-            for c in range(nvj):
-                v += s[i, iu + c] * u[iu + c]
-            vel[ch, i] = v
-            cb[ch, i] = b2[i]
-            acc[ch, i] = ap[i] + b2[i]
-        _spatial_inertia(bmass[ch], binertia[ch], rot[ch], com[ch], sp[ch], tmp)
+                b0, b1, b2 = b0 + c1[0], b1 + c1[1], b2 + c1[2]
+                b3, b4, b5 = b3 + c1[3], b4 + c1[4], b5 + c1[5]
+        pts[k, 0], pts[k, 1], pts[k, 2] = px, py, pz
+        vel[ch, 0], vel[ch, 1], vel[ch, 2] = v0 + m0, v1 + m1, v2 + m2
+        vel[ch, 3], vel[ch, 4], vel[ch, 5] = v3_ + m3_, v4 + m4, v5 + m5
+        cb[ch, 0], cb[ch, 1], cb[ch, 2], cb[ch, 3], cb[ch, 4], cb[ch, 5] = b0, b1, b2, b3, b4, b5
+        acc[ch, 0], acc[ch, 1], acc[ch, 2] = e0 + b0, e1 + b1, e2 + b2
+        acc[ch, 3], acc[ch, 4], acc[ch, 5] = e3 + b3, e4 + b4, e5 + b5
+        inertia_about_origin(bmass[ch], binertia[ch], rot[ch], com[ch], inert[ch], tmp)
+
+
+INERTIA_SIZE = 10
+"""A body's inertia about the world origin O as ten numbers [m, h (3), J_O (6)]: its mass, the
+first moment h = m c (world, c the centre of mass) and the inertia tensor about O in world
+axes, J_O = J_w − m c̃c̃, as [xx, yy, zz, xy, xz, yz]. The spatial inertia they stand for is
+[[J_O, h̃], [−h̃, m E]] (`spatial_times`); the 36 entries of the 6 × 6 matrix take three times
+the products."""
 
 
 @inlined
-def _spatial_inertia(mass, inertia, r, c, out, tmp):
-    """out (6, 6) about O: [[J_w - m c̃c̃, m c̃], [-m c̃, m E]], J_w = R J Rᵀ (as (R J) Rᵀ)."""
+def inertia_about_origin(mass, inertia, r, c, out, tmp):
+    """out (10,) = the body's inertia about O (`INERTIA_SIZE`), from its mass, its inertia
+    about its centre of mass in body axes, R (body → world) and c (world): J_w = (R J) Rᵀ."""
     for i in range(3):
         for k in range(3):
             tmp[i, k] = r[i, 0] * inertia[0, k] + r[i, 1] * inertia[1, k] \
                 + r[i, 2] * inertia[2, k]
-    cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
+    cx, cy, cz = c[0], c[1], c[2]
+    cc = cx * cx + cy * cy + cz * cz
+    out[0] = mass
+    out[1], out[2], out[3] = mass * cx, mass * cy, mass * cz
+    for e in range(6):  # c̃c̃ = c cᵀ − |c|² E
+        i = e if e < 3 else (0 if e < 5 else 1)
+        j = e if e < 3 else (1 if e == 3 else 2)
+        ci = cx if i == 0 else (cy if i == 1 else cz)
+        cj = cx if j == 0 else (cy if j == 1 else cz)
+        out[4 + e] = tmp[i, 0] * r[j, 0] + tmp[i, 1] * r[j, 1] + tmp[i, 2] * r[j, 2] \
+            - mass * (ci * cj - (cc if i == j else 0.0))
+
+
+@inlined
+def spatial_times(ii, v0, v1, v2, v3, v4, v5):
+    """The spatial inertia ``ii`` (`INERTIA_SIZE`) times the motion (ω, v_O) = (v0..v5): the
+    momentum (J_O ω + h × v, m v − h × ω), as six floats."""
+    m, hx, hy, hz = ii[0], ii[1], ii[2], ii[3]
+    return (ii[4] * v0 + ii[7] * v1 + ii[8] * v2 + (hy * v5 - hz * v4),
+            ii[7] * v0 + ii[5] * v1 + ii[9] * v2 + (hz * v3 - hx * v5),
+            ii[8] * v0 + ii[9] * v1 + ii[6] * v2 + (hx * v4 - hy * v3),
+            m * v3 - (hy * v2 - hz * v1),
+            m * v4 - (hz * v0 - hx * v2),
+            m * v5 - (hx * v1 - hy * v0))
+
+
+@inlined
+def spatial_matrix(ii, out):
+    """out (6, 6) = the spatial inertia ``ii`` (`INERTIA_SIZE`) written out."""
+    m, hx, hy, hz = ii[0], ii[1], ii[2], ii[3]
+    out[0, 0], out[1, 1], out[2, 2] = ii[4], ii[5], ii[6]
+    out[0, 1] = out[1, 0] = ii[7]
+    out[0, 2] = out[2, 0] = ii[8]
+    out[1, 2] = out[2, 1] = ii[9]
     for i in range(3):
         for j in range(3):
-            # c̃c̃ = c cᵀ - |c|² E
-            out[i, j] = tmp[i, 0] * r[j, 0] + tmp[i, 1] * r[j, 1] + tmp[i, 2] * r[j, 2] \
-                - mass * (c[i] * c[j] - (cc if i == j else 0.0))
-            out[3 + i, 3 + j] = mass if i == j else 0.0
-    mx, my, mz = mass * c[0], mass * c[1], mass * c[2]
-    out[0, 3], out[0, 4], out[0, 5] = 0.0, -mz, my  # m c̃
-    out[1, 3], out[1, 4], out[1, 5] = mz, 0.0, -mx
-    out[2, 3], out[2, 4], out[2, 5] = -my, mx, 0.0
-    out[3, 0], out[3, 1], out[3, 2] = 0.0, mz, -my  # -m c̃
-    out[4, 0], out[4, 1], out[4, 2] = -mz, 0.0, mx
-    out[5, 0], out[5, 1], out[5, 2] = my, -mx, 0.0
+            out[3 + i, 3 + j] = m if i == j else 0.0
+    out[0, 3], out[0, 4], out[0, 5] = 0.0, -hz, hy  # h̃
+    out[1, 3], out[1, 4], out[1, 5] = hz, 0.0, -hx
+    out[2, 3], out[2, 4], out[2, 5] = -hy, hx, 0.0
+    out[3, 0], out[3, 1], out[3, 2] = 0.0, hz, -hy  # -h̃
+    out[4, 0], out[4, 1], out[4, 2] = -hz, 0.0, hx
+    out[5, 0], out[5, 1], out[5, 2] = hy, -hx, 0.0

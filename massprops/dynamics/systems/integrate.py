@@ -38,8 +38,17 @@ UNCLOSED_WILD = 1e3
 """A loop that cannot be closed by more than this many system sizes was not near a pose that
 does not assemble: the state went wild (RK4 at 8 s steps: a residual of 4.5e49 m)."""
 
-NARROW_RUNS = 3
-"""Fine runs at most, each over the shorter crossing step the previous one found."""
+NARROW_RUNS = 8
+"""Fine runs at most, each over the shorter stretch where the previous one crossed."""
+
+NARROW_PIECES = 16
+"""Each fine run goes over its stretch in this many pieces, each a segment of its own: no step
+is longer than a piece, so each run shrinks the stretch at least this many times even where the
+motion is so smooth that DOP853's error estimate is round-off and its steps would grow past the
+pose again and again (a parallelogram four-bar turning at a constant rate)."""
+
+NARROW_RESOLUTION = 1e-10
+"""A stretch at most this long (relative to its end time, at least 1 s) is the pose's time."""
 
 NARROW_STEPS = 100_000
 """Steps one locating run may take."""
@@ -104,9 +113,10 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors:
 def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales: np.ndarray,
             floors: np.ndarray) -> tuple[float, float, bool]:
     """Where in [low, high] (s) a step crossed a singular pose: that stretch is run again from
-    ``y`` (the state at ``low``) at NARROW_RTOL, whose small steps reach the pose itself
-    (`tolerances.NEAR_SINGULAR_MARGIN`): (t, t); or cross it again in a shorter step, which is
-    run again in turn (NARROW_RUNS at most). Where a run sees nothing the interval stays; the
+    ``y`` (the state at ``low``) at NARROW_RTOL in NARROW_PIECES pieces, whose small steps reach
+    the pose itself (`tolerances.NEAR_SINGULAR_MARGIN`): (t, t); or cross it again in a shorter
+    step, which is run again in turn (NARROW_RUNS at most; a stretch of NARROW_RESOLUTION is the
+    pose's time). Where a run sees nothing the interval stays; the
     flag says whether the first run saw the pose at all (a coarse step can jump the loop to a
     state beyond one that the motion itself never reaches: the four-bar at RK4 steps of 0.5 s)."""
     y_low, n = np.array(y, dtype=float), y.size
@@ -114,15 +124,23 @@ def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales:
         trial = y_low.copy()
         istats = np.array([0, 0, 0, codes.OK, 0, -1, system.rank], dtype=np.int64)
         fstats = np.array([0.0, 0.0, system.margin, 0.0, 0.0, 0.0, 1.0])
-        run_segment(system.program, trial, low, high, min(float(rtol), NARROW_RTOL), DOP853,
-                    np.maximum(np.maximum(np.abs(trial), floors), scales), np.empty(0),
-                    np.empty((0, n)), istats, fstats, np.zeros((system.m, system.nv)),
-                    np.zeros((system.m, max(system.m, system.nv))), NARROW_STEPS, np.zeros(n))
+        accepted_b = np.zeros((system.m, system.nv))
+        accepted_u = np.zeros((system.m, max(system.m, system.nv)))
+        scales_k = np.maximum(np.maximum(np.abs(trial), floors), scales)
+        edges = np.linspace(low, high, NARROW_PIECES + 1)
+        for a, b in zip(edges[:-1], edges[1:]):
+            run_segment(system.program, trial, float(a), float(b), min(float(rtol), NARROW_RTOL),
+                        DOP853, scales_k.copy(), np.empty(0), np.empty((0, n)), istats, fstats,
+                        accepted_b, accepted_u, NARROW_STEPS, np.zeros(n))
+            if istats[3] != codes.OK:
+                break
         if istats[3] != codes.CROSSED:
             if k == 0:
                 return low, high, False
             break
         low, high, y_low = float(fstats[4]), float(fstats[3]), trial
+        if high - low <= NARROW_RESOLUTION * max(1.0, abs(high)):
+            low = high
         if low == high:
             break
     return low, high, True
