@@ -65,8 +65,9 @@ def _dir(rot, vel, acc, body, local, out, i):
 
 @array_inner
 def terms(pp, wp):
-    """Φ (m,), Φ̈ at u̇ = 0 (m,), ρ_b and ρ_a (m, 6), G (m, nv) into the workspace; the
-    couplings' rows last (from the coordinates `systems_tree.kinematics` keeps in ws[34])."""
+    """Φ (m,), Φ̈ at u̇ = 0 (m,), G (m, nv) into the workspace (with ρ_b and ρ_a (m, 6) of
+    the line and distance rows); the couplings' rows last (from the coordinates
+    `systems_tree.kinematics` keeps in ws[34])."""
     pi, pf, size, pjoint, ji = at(pp, 12), at(pp, 13), at(pp, 20)[0], at(pp, 6), at(pp, 1)
     phi, gdot, rb, ra, g, s = at(wp, 19), at(wp, 20), at(wp, 21), at(wp, 22), at(wp, 23), at(wp, 5)
     rot, com, vel, acc = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3)
@@ -77,15 +78,15 @@ def terms(pp, wp):
         kind, a, b, row = pi[n, 0], pi[n, 1], pi[n, 2], pi[n, 3]
         rows = 3 if kind == 0 else 1
         for k in range(rows):
-            for c in range(6):
-                rb[row + k, c] = ra[row + k, c] = 0.0
+            for c in range(g.shape[1]):
+                g[row + k, c] = 0.0
         if kind == 1:  # perp
             _dir(rot, vel, acc, a, pf[n, 6:9], e, -1)
             _dir(rot, vel, acc, b, pf[n, 9:12], d, -1)
             cross_into(w1, d, e)  # axis = n × e
             phi[row] = size * (e[0] * d[0] + e[1] * d[1] + e[2] * d[2])
-            for c in range(3):
-                rb[row, c], ra[row, c] = size * w1[c], -size * w1[c]
+            _turn_row(g, row, ji, pjoint, s, b, w1, size)  # ρ_b = size (n × e, 0) = -ρ_a
+            _turn_row(g, row, ji, pjoint, s, a, w1, -size)
             _dir(rot, vel, acc, a, e, w2, 0)  # ωa
             _dir(rot, vel, acc, b, e, w3, 0)  # ωb
             cross_into(t, w3, d)
@@ -105,13 +106,11 @@ def terms(pp, wp):
             _point(rot, com, vel, acc, b, pf[n, 3:6], xb, vb, ab, t)
             for c in range(3):
                 d[c], dd[c], ddd[c] = xb[c] - xa[c], vb[c] - va[c], ab[c] - aa[c]
-            if kind == 0:  # point
+            if kind == 0:  # point: its rows of G in one walk a side (`_point_rows`)
                 for k in range(3):
-                    for c in range(3):
-                        e[c] = 1.0 if c == k else 0.0
-                    _rho(rb, row + k, xb, e, 1.0)
-                    _rho(ra, row + k, xa, e, -1.0)
                     phi[row + k], gdot[row + k] = d[k], ddd[k]
+                _point_rows(g, row, ji, pjoint, s, b, xb, 1.0)
+                _point_rows(g, row, ji, pjoint, s, a, xa, -1.0)
             elif kind == 2:  # line
                 _dir(rot, vel, acc, a, pf[n, 6:9], e, -1)
                 _dir(rot, vel, acc, a, e, w2, 0)
@@ -129,6 +128,8 @@ def terms(pp, wp):
                 for c in range(3):
                     x += ddd[c] * e[c] + 2 * dd[c] * w1[c] + d[c] * (w4[c] + w5[c])
                 gdot[row] = x
+                _rho_row(g, row, ji, pjoint, s, b, rb)
+                _rho_row(g, row, ji, pjoint, s, a, ra)
             else:  # dist
                 length = pf[n, 12]
                 phi[row] = (d[0] ** 2 + d[1] ** 2 + d[2] ** 2 - length * length) / (2 * length)
@@ -140,31 +141,55 @@ def terms(pp, wp):
                 for c in range(3):
                     x += dd[c] * dd[c] + d[c] * ddd[c]
                 gdot[row] = x / length
-        for k in range(rows):  # G = ρ_b J_b + ρ_a J_a: the S columns of each body's ancestors
-            for c in range(g.shape[1]):
-                g[row + k, c] = 0.0
-            for side in range(2):
-                body = b if side == 0 else a
-                rho = rb if side == 0 else ra
-                j = pjoint[body] if body >= 0 else -1
-                while j >= 0:
-                    for c in range(ji[j, 4], ji[j, 4] + ji[j, 6]):
-                        x = 0.0
-                        for r in range(6):
-                            x += rho[row + k, r] * s[r, c]
-                        g[row + k, c] += x
-                    j = pjoint[ji[j, 1]] if ji[j, 1] >= 0 else -1
+                _rho_row(g, row, ji, pjoint, s, b, rb)
+                _rho_row(g, row, ji, pjoint, s, a, ra)
     ct, cv, qc = at(pp, 23), at(pp, 24), at(wp, 34)
     for k in range(ct.shape[0]):  # the couplings' rows (`dynamics.systems.loops.Coupling`)
         row = ct[k, 0]
         if k == 0 or ct[k - 1, 0] != row:
             phi[row] = gdot[row] = 0.0
-            for c in range(6):
-                rb[row, c] = ra[row, c] = 0.0
             for c in range(g.shape[1]):
                 g[row, c] = 0.0
         phi[row] += cv[k, 0] * qc[ct[k, 1]] - cv[k, 1]
         g[row, ct[k, 2]] += cv[k, 0]
+
+
+@inlined
+def _point_rows(g, row, ji, pjoint, s, body, x, sign):
+    """A point primitive's three rows of G, one side: for each dof c that moves ``body``,
+    g[row:row + 3, c] += sign (v_c + ω_c × x), the velocity that dof gives the point x (its
+    ρ rows (x × e_k, e_k) times S_c, without forming them)."""
+    j = pjoint[body] if body >= 0 else -1
+    while j >= 0:
+        for c in range(ji[j, 4], ji[j, 4] + ji[j, 6]):
+            w0, w1, w2 = s[0, c], s[1, c], s[2, c]
+            g[row, c] += sign * (s[3, c] + (w1 * x[2] - w2 * x[1]))
+            g[row + 1, c] += sign * (s[4, c] + (w2 * x[0] - w0 * x[2]))
+            g[row + 2, c] += sign * (s[5, c] + (w0 * x[1] - w1 * x[0]))
+        j = pjoint[ji[j, 1]] if ji[j, 1] >= 0 else -1
+
+
+@inlined
+def _rho_row(g, row, ji, pjoint, s, body, rho):
+    """G = ρ_b J_b + ρ_a J_a, one side of one row: g[row, c] += ρ[row] · S_c for each dof c
+    that moves ``body`` (its ancestors' S columns)."""
+    j = pjoint[body] if body >= 0 else -1
+    while j >= 0:
+        for c in range(ji[j, 4], ji[j, 4] + ji[j, 6]):
+            g[row, c] += rho[row, 0] * s[0, c] + rho[row, 1] * s[1, c] + rho[row, 2] * s[2, c] \
+                + rho[row, 3] * s[3, c] + rho[row, 4] * s[4, c] + rho[row, 5] * s[5, c]
+        j = pjoint[ji[j, 1]] if ji[j, 1] >= 0 else -1
+
+
+@inlined
+def _turn_row(g, row, ji, pjoint, s, body, axis, scale):
+    """A row whose ρ is (scale axis, 0), one side: g[row, c] += scale axis · ω_c for each dof
+    c that moves ``body``."""
+    j = pjoint[body] if body >= 0 else -1
+    while j >= 0:
+        for c in range(ji[j, 4], ji[j, 4] + ji[j, 6]):
+            g[row, c] += scale * (axis[0] * s[0, c] + axis[1] * s[1, c] + axis[2] * s[2, c])
+        j = pjoint[ji[j, 1]] if ji[j, 1] >= 0 else -1
 
 
 @inlined
