@@ -99,7 +99,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
     if status != OK:
         fail(istats, fstats, yfail, status, t0, y)
         return
-    if accept(prog, ws, acc_b, acc_u, istats, fstats, t0) == CROSSED:  # starts at the pose
+    if accept(pp, wp, acc_b, acc_u, istats, fstats, t0) == CROSSED:  # starts at the pose
         fstats[4] = t0
         fail(istats, fstats, yfail, CROSSED, t0, y)
         return
@@ -120,7 +120,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
                     fail(istats, fstats, yfail, STEP_LIMIT, tp, y)
                     return
                 tq = tb if p == pieces - 1 else ta + (tb - ta) * (p + 1) / pieces
-                status = _step(prog, ws, pp, wp, scratch, arrays, method, tp, tq, tw, rank0)
+                status = _step(pp, wp, scratch, arrays, method, tp, tq, tw, rank0)
                 if status != OK:
                     break
                 istats[0] += 1
@@ -140,7 +140,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
 
 
 @array_inner
-def _step(prog, ws, pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
+def _step(pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
     """One step of ``method`` from (ta, y, fa) to tb: y, fa become the projected end and its
     derivative, samples inside written; OK, NEWTON_FAILED (nothing changed), or a failure's
     status (recorded). Every evaluation judges the load windows at ``tw``; pp, wp: the program
@@ -167,15 +167,14 @@ def _step(prog, ws, pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
     if status != OK:
         fail(istats, fstats, yfail, status, tb, ynew)
         return status
-    status = settle(prog, ws, pp, wp, ynew, fb, ta, tb, tw, moved, istats, fstats, acc_b,
-                    acc_u, yfail)
+    status = settle(pp, wp, ynew, fb, ta, tb, tw, moved, istats, fstats, acc_b, acc_u, yfail)
     if status != OK:
         return status
     kout = istats[4]
     while kout < t_out.size and t_out[kout] <= tb:
         row = y_out[kout]
         _hermite(y, fa, ynew, fb, h, (t_out[kout] - ta) / h, row)
-        status = project_sample(prog, ws, row, t_out[kout], moved, istats, fstats, yfail)
+        status = project_sample(pp, wp, row, t_out[kout], moved, istats, fstats, yfail)
         if status != OK:
             return status
         kout += 1

@@ -58,7 +58,8 @@ def stand_in() -> tuple:
             np.zeros((0, 13)), np.zeros((0, 4), ints), np.zeros((0, 8)), np.zeros((0, 2), ints),
             np.zeros((0, 9)), np.zeros(0, ints), np.zeros((0, 6)),
             np.array([1.0, 1e-8, 1e-14, 1e-6]), np.zeros((0, 3), ints), np.zeros((0, 21)),
-            np.zeros((0, 3), ints), np.zeros((0, 2)))
+            np.zeros((0, 3), ints), np.zeros((0, 2)),
+            np.array([[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]]), np.eye(3).reshape(1, 3, 3))
 
 
 def warm_up() -> None:

@@ -20,7 +20,7 @@ from massprops.dynamics.compiled.systems_loops import (
     factor,
     min_norm,
 )
-from massprops.dynamics.compiled.systems_tree import FREE, INERTIA_SIZE, SPHERICAL, kinematics
+from massprops.dynamics.compiled.systems_tree import FREE, INERTIA_SIZE, SPHERICAL, poses
 from massprops.dynamics.compiled.unowned import at, by_ref
 
 UNDERFLOW, STEP_LIMIT, CROSSED, UNCLOSED = 1, 2, 4, 5
@@ -63,10 +63,17 @@ def rhs_ref(pp, wp, t, y, out, rank0):
     """`rhs` with the program and workspace by reference (`unowned.by_ref`, made once by a step
     loop: passing the two tuples themselves costs ~0.5 µs a call, a quarter of a small system's
     right-hand side)."""
+    return _rhs(pp, wp, t, y, out, rank0, False)
+
+
+@inlined
+def _rhs(pp, wp, t, y, out, rank0, posed):
+    """`rhs_ref`; ``posed``: the workspace holds the poses and factors at y's q
+    (`systems_loops.accelerations`)."""
     ji = at(pp, 1)
     nq = at(pp, 0)[0]
     q, u = y[:nq], y[nq:]
-    status = accelerations(pp, wp, t, q, u, out[nq:], rank0)
+    status = accelerations(pp, wp, t, q, u, out[nq:], rank0, posed)
     for k in range(ji.shape[0]):
         kind, iq, iu, nqj = ji[k, 0], ji[k, 3], ji[k, 4], ji[k, 5]
         if kind == SPHERICAL:
@@ -111,9 +118,9 @@ def _quat_turn(q, o, rv, ir):
 
 
 @array_inner
-def normalize(prog, q):
-    """Every quaternion coordinate of q renormalised in place."""
-    ji = prog[1]
+def normalize(pp, q):
+    """Every quaternion coordinate of q renormalised in place (pp: the program by reference)."""
+    ji = at(pp, 1)
     for k in range(ji.shape[0]):
         if ji[k, 0] == SPHERICAL or ji[k, 0] == FREE:
             o = ji[k, 3] + (3 if ji[k, 0] == FREE else 0)
@@ -123,9 +130,9 @@ def normalize(prog, q):
 
 
 @array_inner
-def _advance(prog, q, delta):
+def _advance(pp, q, delta):
     """q moved by the tangent delta: coordinates add, quaternions turn by exp(δ)."""
-    ji = prog[1]
+    ji = at(pp, 1)
     for k in range(ji.shape[0]):
         kind, iq, iu, nqj = ji[k, 0], ji[k, 3], ji[k, 4], ji[k, 5]
         if kind == SPHERICAL:
@@ -144,19 +151,25 @@ def project(prog, ws, y, iterations, moved):
     """y moved onto Φ = 0, Φ̇ = 0 in place (System.project without fixed coordinates): status;
     moved[0] the sum of the position corrections' max-norms, moved[1] the velocity's, moved[2]
     the residual left when the loop cannot be closed (status UNCLOSED)."""
-    nq, m = prog[0][0], prog[0][2]
+    return project_ref(by_ref(prog), by_ref(ws), y, iterations, moved)
+
+
+@array_inner
+def project_ref(pp, wp, y, iterations, moved):
+    """`project` with the program and workspace by reference (`unowned.by_ref`): the step
+    loops call it after every step, where passing the tuples themselves cost ~0.3 µs a call."""
+    nq, m = at(pp, 0)[0], at(pp, 0)[2]
     moved[0] = moved[1] = 0.0
     if m == 0:
         return OK
     q, u = y[:nq], y[nq:]
-    normalize(prog, q)
-    atol = prog[20][2]
-    phi, g, delta, row = ws[19], ws[23], ws[37], ws[36]
+    normalize(pp, q)
+    atol = at(pp, 20)[2]
+    phi, g, delta, row = at(wp, 19), at(wp, 23), at(wp, 37), at(wp, 36)
     nv = u.shape[0]
     done = 0
-    pp, wp = by_ref(prog), by_ref(ws)
     while True:  # Newton on Φ: `iterations` corrections at most, then Φ must be near round-off
-        kinematics(pp, q, u, wp)
+        poses(pp, q, wp)  # (terms' Φ̈ reads a stale motion: it is not used here)
         if not factor(pp, wp):
             return LINALG
         residual = _largest(phi)
@@ -173,7 +186,7 @@ def project(prog, ws, y, iterations, moved):
             delta[i] = -delta[i]
             worst = max(worst, abs(delta[i]))
         moved[0] += worst
-        _advance(prog, q, delta)
+        _advance(pp, q, delta)
         done += 1
     for i in range(m):
         x = 0.0
@@ -198,17 +211,17 @@ def _largest(v):
 
 
 @array_inner
-def accept(prog, ws, acc_b, acc_u, istats, fstats, t):
+def accept(pp, wp, acc_b, acc_u, istats, fstats, t):
     """After the right-hand side at an accepted state (time t): CROSSED when a kept singular
     value of B = G L⁻ᵀ (`systems_loops.decompose`) changed sign since the last accepted step
     (det(U_prevᵀ B B_prevᵀ U_prev) ≤ 0) or is below prog[20][3] (NEAR_SINGULAR_MARGIN) of the
     largest (fstats[6] the smallest such ratio, fstats[2] the run's), else OK; the step's B and
     kept U become the last accepted (istats[5] their rank)."""
-    bm, uo, keep, x, sv = ws[26], ws[31], ws[30], ws[27], ws[29]
+    bm, uo, keep, x, sv = at(wp, 26), at(wp, 31), at(wp, 30), at(wp, 27), at(wp, 29)
     m, nv = bm.shape[0], bm.shape[1]
     if m == 0:
         return OK
-    decompose(by_ref(prog), by_ref(ws))
+    decompose(pp, wp)
     if keep[0] == 0:
         return OK
     r = istats[5]
@@ -221,7 +234,7 @@ def accept(prog, ws, acc_b, acc_u, istats, fstats, t):
     if least < fstats[6] * top:
         fstats[6] = least / top
     fstats[2] = min(fstats[2], fstats[6])
-    if least < prog[20][3] * top:
+    if least < at(pp, 20)[3] * top:
         status = CROSSED
     if r >= 0:
         for a in range(r):
@@ -261,37 +274,38 @@ def fail(istats, fstats, yfail, status, t, y):
 
 
 @array_inner
-def settle(prog, ws, pp, wp, y, f, t_start, t, tw, moved, istats, fstats, acc_b, acc_u,
-           yfail):
+def settle(pp, wp, y, f, t_start, t, tw, moved, istats, fstats, acc_b, acc_u, yfail):
     """What every method does after an accepted step from t_start to t (s), on its end y:
     y projected onto Φ = 0, Φ̇ = 0 and its quaternions renormalised, f = ẏ evaluated there
     (loads judged at tw), the singular-pose test (`accept`). OK, or the failure's status,
     recorded (`fail`); on CROSSED fstats[4] is where the crossing began (t itself when y is at
     the pose)."""
-    status = project(prog, ws, y, PROJECT_ITERATIONS, moved)
+    status = project_ref(pp, wp, y, PROJECT_ITERATIONS, moved)
     if status != OK:
         fstats[5] = moved[2]
         fail(istats, fstats, yfail, status, t, y)
         return status
-    normalize(prog, y[:prog[0][0]])
+    loops = at(pp, 0)[2] > 0  # the projection ended with poses and factors at y's q
+    if not loops:  # (its Newton steps renormalise the quaternions they turn)
+        normalize(pp, y[:at(pp, 0)[0]])
     fstats[0] = max(fstats[0], moved[0])
     fstats[1] = max(fstats[1], moved[1])
-    status = rhs_ref(pp, wp, tw, y, f, istats[6])
+    status = _rhs(pp, wp, tw, y, f, istats[6], loops)
     istats[1] += 1
     if status != OK:
         fail(istats, fstats, yfail, status, t, y)
         return status
-    if accept(prog, ws, acc_b, acc_u, istats, fstats, t) == CROSSED:
-        fstats[4] = t_start if fstats[6] > prog[20][3] else t
+    if accept(pp, wp, acc_b, acc_u, istats, fstats, t) == CROSSED:
+        fstats[4] = t_start if fstats[6] > at(pp, 20)[3] else t
         fail(istats, fstats, yfail, CROSSED, t, y)
         return CROSSED
     return OK
 
 
 @array_inner
-def project_sample(prog, ws, row, t, moved, istats, fstats, yfail):
+def project_sample(pp, wp, row, t, moved, istats, fstats, yfail):
     """A dense-output sample ``row`` (at t) projected in place; OK or the failure, recorded."""
-    status = project(prog, ws, row, PROJECT_ITERATIONS, moved)
+    status = project_ref(pp, wp, row, PROJECT_ITERATIONS, moved)
     if status != OK:
         fstats[5] = moved[2]
         fail(istats, fstats, yfail, status, t, row)

@@ -97,31 +97,42 @@ def kinematics(pp, q, u, wp):
     """Per body: R, com, V and A at u̇ = 0 (with the joint's own bias term in ``cb``), the
     inertia about O (`inertia_about_origin`'s ten numbers); per dof a column of S; per joint
     its point (world); q itself where the system has couplings (ws[34], for
-    `systems_loops.terms`). The parent's pose and motion are read into scalars once per joint,
-    not copied into scratch arrays: a store to one float array may alias a load from another,
-    so each copied value was reloaded at every use (measured on the four-bar: 733 → ~510 ns)."""
-    ji, jaxes, jsp, jsc, jrp0 = at(pp, 1), at(pp, 2), at(pp, 3), at(pp, 4), at(pp, 5)
+    `systems_loops.terms`): `poses`, then `motion`."""
+    _poses(pp, q, wp)
+    _motion(pp, u, wp)
+
+
+@array_inner
+def poses(pp, q, wp):
+    """What `kinematics` computes from q alone: R, com, inertia, S, joint points (and q)."""
+    _poses(pp, q, wp)
+
+
+@array_inner
+def motion(pp, u, wp):
+    """What `kinematics` computes from u, after `poses`: V, A at u̇ = 0 and ``cb``."""
+    _motion(pp, u, wp)
+
+
+@inlined
+def _poses(pp, q, wp):
+    """`poses`. The parent's pose is read in place and the child's motion built in scalars,
+    not copied through scratch arrays: a store to one float array may alias a load from another,
+    so each copied value was reloaded at every use (with `_motion`'s scalars, measured on the
+    four-bar: 733 → ~510 ns)."""
+    ji, jsp, jsc, jrp0 = at(pp, 1), at(pp, 3), at(pp, 4), at(pp, 5)
     bmass, binertia, brot0, bcom0 = at(pp, 7), at(pp, 8), at(pp, 9), at(pp, 10)
-    rot, com, vel, acc = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3)
-    inert, s, pts, cb = at(wp, 4), at(wp, 5), at(wp, 6), at(wp, 7)
-    m3, v3, v6 = at(wp, 8), at(wp, 9), at(wp, 10)
+    jaxp, jrc0 = at(pp, 25), at(pp, 26)
+    rot, com, inert, s, pts = at(wp, 0), at(wp, 1), at(wp, 4), at(wp, 5), at(wp, 6)
+    m3, v3 = at(wp, 8), at(wp, 9)
     carry, qm, tmp, rp = m3[0], m3[1], m3[2], m3[3]
     d, w = v3[0], v3[2]
-    c0, c1, su = v6[4], v6[5], v6[2]
     qc = at(wp, 34)  # the coordinates, for the couplings' rows (sized 0 without couplings)
     for i in range(qc.size):
         qc[i] = q[i]
     for k in range(ji.shape[0]):
-        kind, par, ch, iq, iu, nvj = ji[k, 0], ji[k, 1], ji[k, 2], ji[k, 3], ji[k, 4], ji[k, 6]
-        if par >= 0:
-            v0, v1, v2, v3_, v4, v5 = vel[par, 0], vel[par, 1], vel[par, 2], vel[par, 3], \
-                vel[par, 4], vel[par, 5]
-            e0, e1, e2, e3, e4, e5 = acc[par, 0], acc[par, 1], acc[par, 2], acc[par, 3], \
-                acc[par, 4], acc[par, 5]
-        else:
-            v0 = v1 = v2 = v3_ = v4 = v5 = 0.0
-            e0 = e1 = e2 = e3 = e4 = e5 = 0.0
-        if kind == FREE:  # the world's child: V = S u, its bias ω × v
+        kind, par, ch, iq, iu = ji[k, 0], ji[k, 1], ji[k, 2], ji[k, 3], ji[k, 4]
+        if kind == FREE:  # the world's child
             quat_into(qm, q, iq + 3)
             mm3(qm, brot0[ch], rot[ch], False)
             px, py, pz = bcom0[ch, 0] + q[iq], bcom0[ch, 1] + q[iq + 1], bcom0[ch, 2] + q[iq + 2]
@@ -134,15 +145,9 @@ def kinematics(pp, q, u, wp):
                 for j in range(3):
                     w[j] = 1.0 if i == j else 0.0
                 _column(s, iu + 3 + i, w, px, py, pz, True)
-            b0 = b1 = b2 = 0.0
-            b3 = u[iu + 1] * u[iu + 5] - u[iu + 2] * u[iu + 4]
-            b4 = u[iu + 2] * u[iu + 3] - u[iu] * u[iu + 5]
-            b5 = u[iu] * u[iu + 4] - u[iu + 1] * u[iu + 3]
         else:
-            jr = jrp0[k]
-            if par >= 0:  # the joint frame in the world, and the joint point
-                pr = rot[par]
-                mm3(pr, jr, carry, True)
+            pr = rot[par if par >= 0 else 0]  # the parent's R (unread for the world's children)
+            if par >= 0:  # the joint point
                 px = com[par, 0] + pr[0, 0] * jsp[k, 0] + pr[0, 1] * jsp[k, 1] \
                     + pr[0, 2] * jsp[k, 2]
                 py = com[par, 1] + pr[1, 0] * jsp[k, 0] + pr[1, 1] * jsp[k, 1] \
@@ -150,53 +155,89 @@ def kinematics(pp, q, u, wp):
                 pz = com[par, 2] + pr[2, 0] * jsp[k, 0] + pr[2, 1] * jsp[k, 1] \
                     + pr[2, 2] * jsp[k, 2]
             else:
-                for i in range(3):
-                    for j in range(3):
-                        carry[i, j] = jr[j, i]
                 px, py, pz = jsp[k, 0], jsp[k, 1], jsp[k, 2]
-            a0, a1 = jaxes[k, 0], jaxes[k, 1]
-            turned = True
-            if kind == REVOLUTE or kind == CYLINDRICAL:
-                rot_into(qm, a0, q[iq])
-            elif kind == UNIVERSAL:
-                rot_into(tmp, a0, q[iq])
-                rot_into(rp, a1, q[iq + 1])
-                mm3(tmp, rp, qm, False)  # R(a0, q0) R(a1, q1)
-            elif kind == SPHERICAL:
+            if kind == SPHERICAL:  # through the joint frame, whose axes are S's columns
+                jr = jrp0[k]
+                if par >= 0:
+                    mm3(pr, jr, carry, True)
+                else:
+                    for i in range(3):
+                        for j in range(3):
+                            carry[i, j] = jr[j, i]
                 quat_into(qm, q, iq)
-            else:  # prismatic, fixed: the child turns with the joint frame
-                turned = False
-            if kind == PRISMATIC or kind == CYLINDRICAL:  # the shift q a along the frame's a
-                x = q[iq + 1] if kind == CYLINDRICAL else q[iq]
-                px += x * (carry[0, 0] * a0[0] + carry[0, 1] * a0[1] + carry[0, 2] * a0[2])
-                py += x * (carry[1, 0] * a0[0] + carry[1, 1] * a0[1] + carry[1, 2] * a0[2])
-                pz += x * (carry[2, 0] * a0[0] + carry[2, 1] * a0[1] + carry[2, 2] * a0[2])
-            if turned:
                 mm3(carry, qm, rp, False)
                 mm3(rp, brot0[ch], rot[ch], False)
-            else:
-                mm3(carry, brot0[ch], rot[ch], False)
-            rc = rot[ch]
-            for i in range(3):
-                com[ch, i] = (px if i == 0 else (py if i == 1 else pz)) - rc[i, 0] * jsc[k, 0] \
-                    - rc[i, 1] * jsc[k, 1] - rc[i, 2] * jsc[k, 2]
-            if kind == SPHERICAL:
                 for c in range(3):
                     for i in range(3):
                         w[i] = carry[i, c]
                     _column(s, iu + c, w, px, py, pz, True)
-            elif kind != FIXED:
-                for i in range(3):
-                    w[i] = carry[i, 0] * a0[0] + carry[i, 1] * a0[1] + carry[i, 2] * a0[2]
-                _column(s, iu, w, px, py, pz, kind != PRISMATIC)
+            else:  # in the parent's frame (program entries 25 and 26)
+                a0, a1, kc = jaxp[k, 0], jaxp[k, 1], jrc0[k]
+                turned = True
+                if kind == REVOLUTE or kind == CYLINDRICAL:
+                    rot_into(qm, a0, q[iq])
+                elif kind == UNIVERSAL:
+                    rot_into(tmp, a0, q[iq])
+                    rot_into(rp, a1, q[iq + 1])
+                    mm3(tmp, rp, qm, False)  # R(a0, q0) R(a1, q1)
+                else:  # prismatic, fixed: the child turns with its parent
+                    turned = False
+                if par >= 0:
+                    if turned:
+                        mm3(pr, qm, rp, False)
+                        mm3(rp, kc, rot[ch], False)
+                    else:
+                        mm3(pr, kc, rot[ch], False)
+                    for i in range(3):  # the first axis in the world
+                        w[i] = pr[i, 0] * a0[0] + pr[i, 1] * a0[1] + pr[i, 2] * a0[2]
+                else:
+                    if turned:
+                        mm3(qm, kc, rot[ch], False)
+                    else:
+                        for i in range(3):
+                            for j in range(3):
+                                rot[ch, i, j] = kc[i, j]
+                    for i in range(3):
+                        w[i] = a0[i]
+                if kind == PRISMATIC or kind == CYLINDRICAL:  # the shift q a along that axis
+                    x = q[iq + 1] if kind == CYLINDRICAL else q[iq]
+                    px, py, pz = px + x * w[0], py + x * w[1], pz + x * w[2]
+                if kind != FIXED:
+                    _column(s, iu, w, px, py, pz, kind != PRISMATIC)
                 if kind == CYLINDRICAL:
                     _column(s, iu + 1, w, px, py, pz, False)
-                elif kind == UNIVERSAL:
+                elif kind == UNIVERSAL:  # the second axis, turned by the first turn
                     for i in range(3):
                         d[i] = tmp[i, 0] * a1[0] + tmp[i, 1] * a1[1] + tmp[i, 2] * a1[2]
                     for i in range(3):
-                        w[i] = carry[i, 0] * d[0] + carry[i, 1] * d[1] + carry[i, 2] * d[2]
+                        w[i] = (pr[i, 0] * d[0] + pr[i, 1] * d[1] + pr[i, 2] * d[2]) \
+                            if par >= 0 else d[i]
                     _column(s, iu + 1, w, px, py, pz, True)
+            rc = rot[ch]
+            for i in range(3):
+                com[ch, i] = (px if i == 0 else (py if i == 1 else pz)) - rc[i, 0] * jsc[k, 0] \
+                    - rc[i, 1] * jsc[k, 1] - rc[i, 2] * jsc[k, 2]
+        pts[k, 0], pts[k, 1], pts[k, 2] = px, py, pz
+        inertia_about_origin(bmass[ch], binertia[ch], rot[ch], com[ch], inert[ch], tmp)
+
+
+@inlined
+def _motion(pp, u, wp):
+    """`motion`: per joint, from its parent's V and A (the world's: 0) and its S columns."""
+    ji = at(pp, 1)
+    vel, acc, s, cb = at(wp, 2), at(wp, 3), at(wp, 5), at(wp, 7)
+    v6 = at(wp, 10)
+    c0, c1, su = v6[4], v6[5], v6[2]
+    for k in range(ji.shape[0]):
+        kind, par, ch, iu, nvj = ji[k, 0], ji[k, 1], ji[k, 2], ji[k, 4], ji[k, 6]
+        if par >= 0:
+            v0, v1, v2, v3_, v4, v5 = vel[par, 0], vel[par, 1], vel[par, 2], vel[par, 3], \
+                vel[par, 4], vel[par, 5]
+            e0, e1, e2, e3, e4, e5 = acc[par, 0], acc[par, 1], acc[par, 2], acc[par, 3], \
+                acc[par, 4], acc[par, 5]
+        else:
+            v0 = v1 = v2 = v3_ = v4 = v5 = 0.0
+            e0 = e1 = e2 = e3 = e4 = e5 = 0.0
         m0 = m1 = m2 = m3_ = m4 = m5 = 0.0  # the joint's motion S u
         for c in range(nvj):
             x = u[iu + c]
@@ -206,7 +247,12 @@ def kinematics(pp, q, u, wp):
             m3_ += s[3, iu + c] * x
             m4 += s[4, iu + c] * x
             m5 += s[5, iu + c] * x
-        if kind != FREE:  # the bias V_parent ×m S u
+        if kind == FREE:  # the world's child: its bias v_c × ω (u = [v_c, ω])
+            b0 = b1 = b2 = 0.0
+            b3 = u[iu + 1] * u[iu + 5] - u[iu + 2] * u[iu + 4]
+            b4 = u[iu + 2] * u[iu + 3] - u[iu] * u[iu + 5]
+            b5 = u[iu] * u[iu + 4] - u[iu + 1] * u[iu + 3]
+        else:  # the bias V_parent ×m S u
             b0 = v1 * m2 - v2 * m1
             b1 = v2 * m0 - v0 * m2
             b2 = v0 * m1 - v1 * m0
@@ -220,13 +266,11 @@ def kinematics(pp, q, u, wp):
                 motion_cross(c0, su, c1)
                 b0, b1, b2 = b0 + c1[0], b1 + c1[1], b2 + c1[2]
                 b3, b4, b5 = b3 + c1[3], b4 + c1[4], b5 + c1[5]
-        pts[k, 0], pts[k, 1], pts[k, 2] = px, py, pz
         vel[ch, 0], vel[ch, 1], vel[ch, 2] = v0 + m0, v1 + m1, v2 + m2
         vel[ch, 3], vel[ch, 4], vel[ch, 5] = v3_ + m3_, v4 + m4, v5 + m5
         cb[ch, 0], cb[ch, 1], cb[ch, 2], cb[ch, 3], cb[ch, 4], cb[ch, 5] = b0, b1, b2, b3, b4, b5
         acc[ch, 0], acc[ch, 1], acc[ch, 2] = e0 + b0, e1 + b1, e2 + b2
         acc[ch, 3], acc[ch, 4], acc[ch, 5] = e3 + b3, e4 + b4, e5 + b5
-        inertia_about_origin(bmass[ch], binertia[ch], rot[ch], com[ch], inert[ch], tmp)
 
 
 INERTIA_SIZE = 10

@@ -21,7 +21,10 @@ A tuple of C-contiguous arrays, int64 or float64, in this order (the kernels ind
    and in b's frame, stiffness, rest, damping, drive, start, end] (`cutjoint`; body frames,
    world for the world);
  23 coupling terms (nt, 3) int [row, iq, iu]; 24 (nt, 2) [scale c, scale constant on a
-   coupling's first term, else 0] (`loops.Coupling`: Φ_row = Σ scale c q[iq] − scale constant).
+   coupling's first term, else 0] (`loops.Coupling`: Φ_row = Σ scale c q[iq] − scale constant);
+ 25 axes in the parent's frame (nj, 2, 3), R_p0ᵀ a; 26 (nj, 3, 3) R_p0ᵀ R_c0, R_c0 the child's
+   rotation0: a joint turning by Rot(a, q) in its frame gives the child
+   R_parent Rot(R_p0ᵀ a, q) R_p0ᵀ R_c0, one 3 × 3 product fewer than through the joint frame.
 Frames and meanings as in `tree`, `loops` and `System` (the numpy objects these mirror).
 """
 
@@ -88,7 +91,10 @@ def build_program(system) -> tuple:
            np.asarray(system.weights, float).reshape(n, 3), pi, pf, fi, ff, si, sf, li, lf,
            np.array([tree.size, tolerances.CONSTRAINT_RANK_RTOL,
                      tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size,
-                     tolerances.NEAR_SINGULAR_MARGIN]), ci, cf, *_couplings(tree, row))
+                     tolerances.NEAR_SINGULAR_MARGIN]), ci, cf, *_couplings(tree, row),
+           np.einsum("kji,kaj->kai", rp0, axes),  # R_p0ᵀ a: the axes in the parent's frame
+           np.einsum("kji,kjl->kil", rp0, np.array([bodies[j.child].rotation0 for j in joints],
+                                                    float).reshape(nj, 3, 3)))
     return tuple(np.ascontiguousarray(a) for a in out)
 
 
