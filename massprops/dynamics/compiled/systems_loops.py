@@ -31,24 +31,43 @@ OK, LINALG, SINGULAR = 0, 6, 3
 
 
 @inlined
-def _point(rot, com, vel, acc, body, local, x, v, a, t):
-    """World position, velocity and acceleration (kinematics' A) of a body point."""
+def _point_motion(rot, com, vel, acc, body, local):
+    """World position, velocity and acceleration (kinematics' A) of a body point: nine floats
+    (x, v, a), in scalars rather than scratch arrays (see `systems_tree._poses`)."""
     if body < 0:
-        for i in range(3):
-            x[i], v[i], a[i] = local[i], 0.0, 0.0
-        return
-    for i in range(3):
-        x[i] = com[body, i] + rot[body, i, 0] * local[0] + rot[body, i, 1] * local[1] \
-            + rot[body, i, 2] * local[2]
-    cross_into(t, vel[body, 0:3], x)
-    for i in range(3):
-        v[i] = vel[body, 3 + i] + t[i]
-    cross_into(t, acc[body, 0:3], x)
-    for i in range(3):
-        a[i] = acc[body, 3 + i] + t[i]
-    cross_into(t, vel[body, 0:3], v)
-    for i in range(3):
-        a[i] += t[i]
+        return local[0], local[1], local[2], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    r = rot[body]
+    x0 = com[body, 0] + r[0, 0] * local[0] + r[0, 1] * local[1] + r[0, 2] * local[2]
+    x1 = com[body, 1] + r[1, 0] * local[0] + r[1, 1] * local[1] + r[1, 2] * local[2]
+    x2 = com[body, 2] + r[2, 0] * local[0] + r[2, 1] * local[1] + r[2, 2] * local[2]
+    w0, w1, w2 = vel[body, 0], vel[body, 1], vel[body, 2]
+    v0 = vel[body, 3] + (w1 * x2 - w2 * x1)
+    v1 = vel[body, 4] + (w2 * x0 - w0 * x2)
+    v2 = vel[body, 5] + (w0 * x1 - w1 * x0)
+    e0, e1, e2 = acc[body, 0], acc[body, 1], acc[body, 2]
+    a0 = acc[body, 3] + (e1 * x2 - e2 * x1) + (w1 * v2 - w2 * v1)
+    a1 = acc[body, 4] + (e2 * x0 - e0 * x2) + (w2 * v0 - w0 * v2)
+    a2 = acc[body, 5] + (e0 * x1 - e1 * x0) + (w0 * v1 - w1 * v0)
+    return x0, x1, x2, v0, v1, v2, a0, a1, a2
+
+
+@inlined
+def _turned(rot, body, local):
+    """R_body local (the world: local) as three floats."""
+    if body < 0:
+        return local[0], local[1], local[2]
+    r = rot[body]
+    return (r[0, 0] * local[0] + r[0, 1] * local[1] + r[0, 2] * local[2],
+            r[1, 0] * local[0] + r[1, 1] * local[1] + r[1, 2] * local[2],
+            r[2, 0] * local[0] + r[2, 1] * local[1] + r[2, 2] * local[2])
+
+
+@inlined
+def _first3(arr, body):
+    """arr[body, :3] (ω of a velocity, ω̇ of an acceleration) as three floats, 0 for the world."""
+    if body < 0:
+        return 0.0, 0.0, 0.0
+    return arr[body, 0], arr[body, 1], arr[body, 2]
 
 
 @inlined
@@ -72,7 +91,7 @@ def terms(pp, wp):
     phi, gdot, rb, ra, g, s = at(wp, 19), at(wp, 20), at(wp, 21), at(wp, 22), at(wp, 23), at(wp, 5)
     rot, com, vel, acc = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3)
     v = at(wp, 9)
-    xa, va, aa, xb, vb, ab, t, e = v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+    xa, xb, t, e = v[0], v[3], v[6], v[7]
     d, dd, ddd, w1, w2, w3, w4, w5 = v[8], v[9], v[10], v[11], v[12], v[13], v[14], v[15]
     for n in range(pi.shape[0]):
         kind, a, b, row = pi[n, 0], pi[n, 1], pi[n, 2], pi[n, 3]
@@ -80,38 +99,43 @@ def terms(pp, wp):
         for k in range(rows):
             for c in range(g.shape[1]):
                 g[row + k, c] = 0.0
-        if kind == 1:  # perp
-            _dir(rot, vel, acc, a, pf[n, 6:9], e, -1)
-            _dir(rot, vel, acc, b, pf[n, 9:12], d, -1)
-            cross_into(w1, d, e)  # axis = n × e
-            phi[row] = size * (e[0] * d[0] + e[1] * d[1] + e[2] * d[2])
-            _turn_row(g, row, ji, pjoint, s, b, w1, size)  # ρ_b = size (n × e, 0) = -ρ_a
-            _turn_row(g, row, ji, pjoint, s, a, w1, -size)
-            _dir(rot, vel, acc, a, e, w2, 0)  # ωa
-            _dir(rot, vel, acc, b, e, w3, 0)  # ωb
-            cross_into(t, w3, d)
-            cross_into(w4, t, e)  # (ωb × n) × e
-            cross_into(t, w2, e)
-            cross_into(w5, d, t)  # n × (ωa × e)
-            x = 0.0
-            for c in range(3):
-                x += (w3[c] - w2[c]) * (w4[c] + w5[c])
-            _dir(rot, vel, acc, a, e, w2, 1)
-            _dir(rot, vel, acc, b, e, w3, 1)
-            for c in range(3):
-                x += (w3[c] - w2[c]) * w1[c]
-            gdot[row] = size * x
+        if kind == 1:  # perp: n · e = 0, e on a, n on b (both world)
+            e0, e1, e2 = _turned(rot, a, pf[n, 6:9])
+            d0, d1, d2 = _turned(rot, b, pf[n, 9:12])
+            n0, n1, n2 = d1 * e2 - d2 * e1, d2 * e0 - d0 * e2, d0 * e1 - d1 * e0  # n × e
+            phi[row] = size * (e0 * d0 + e1 * d1 + e2 * d2)
+            _turn_row(g, row, ji, pjoint, s, b, n0, n1, n2, size)  # ρ_b = size (n × e, 0)
+            _turn_row(g, row, ji, pjoint, s, a, n0, n1, n2, -size)  # = -ρ_a
+            wa0, wa1, wa2 = _first3(vel, a)
+            wb0, wb1, wb2 = _first3(vel, b)
+            t0, t1, t2 = wb1 * d2 - wb2 * d1, wb2 * d0 - wb0 * d2, wb0 * d1 - wb1 * d0
+            f0 = t1 * e2 - t2 * e1  # (ωb × n) × e
+            f1 = t2 * e0 - t0 * e2
+            f2 = t0 * e1 - t1 * e0
+            t0, t1, t2 = wa1 * e2 - wa2 * e1, wa2 * e0 - wa0 * e2, wa0 * e1 - wa1 * e0
+            f0 += d1 * t2 - d2 * t1  # + n × (ωa × e)
+            f1 += d2 * t0 - d0 * t2
+            f2 += d0 * t1 - d1 * t0
+            aa0, aa1, aa2 = _first3(acc, a)
+            ab0, ab1, ab2 = _first3(acc, b)
+            gdot[row] = size * ((wb0 - wa0) * f0 + (wb1 - wa1) * f1 + (wb2 - wa2) * f2
+                                + (ab0 - aa0) * n0 + (ab1 - aa1) * n1 + (ab2 - aa2) * n2)
         else:
-            _point(rot, com, vel, acc, a, pf[n, 0:3], xa, va, aa, t)
-            _point(rot, com, vel, acc, b, pf[n, 3:6], xb, vb, ab, t)
-            for c in range(3):
-                d[c], dd[c], ddd[c] = xb[c] - xa[c], vb[c] - va[c], ab[c] - aa[c]
+            xa0, xa1, xa2, va0, va1, va2, aa0, aa1, aa2 = _point_motion(rot, com, vel, acc, a,
+                                                                        pf[n, 0:3])
+            xb0, xb1, xb2, vb0, vb1, vb2, ab0, ab1, ab2 = _point_motion(rot, com, vel, acc, b,
+                                                                        pf[n, 3:6])
             if kind == 0:  # point: its rows of G in one walk a side (`_point_rows`)
-                for k in range(3):
-                    phi[row + k], gdot[row + k] = d[k], ddd[k]
-                _point_rows(g, row, ji, pjoint, s, b, xb, 1.0)
-                _point_rows(g, row, ji, pjoint, s, a, xa, -1.0)
-            elif kind == 2:  # line
+                phi[row], phi[row + 1], phi[row + 2] = xb0 - xa0, xb1 - xa1, xb2 - xa2
+                gdot[row], gdot[row + 1], gdot[row + 2] = ab0 - aa0, ab1 - aa1, ab2 - aa2
+                _point_rows(g, row, ji, pjoint, s, b, xb0, xb1, xb2, 1.0)
+                _point_rows(g, row, ji, pjoint, s, a, xa0, xa1, xa2, -1.0)
+                continue
+            xa[0], xa[1], xa[2], xb[0], xb[1], xb[2] = xa0, xa1, xa2, xb0, xb1, xb2
+            d[0], d[1], d[2] = xb0 - xa0, xb1 - xa1, xb2 - xa2
+            dd[0], dd[1], dd[2] = vb0 - va0, vb1 - va1, vb2 - va2
+            ddd[0], ddd[1], ddd[2] = ab0 - aa0, ab1 - aa1, ab2 - aa2
+            if kind == 2:  # line
                 _dir(rot, vel, acc, a, pf[n, 6:9], e, -1)
                 _dir(rot, vel, acc, a, e, w2, 0)
                 cross_into(w1, w2, e)  # we
@@ -155,7 +179,7 @@ def terms(pp, wp):
 
 
 @inlined
-def _point_rows(g, row, ji, pjoint, s, body, x, sign):
+def _point_rows(g, row, ji, pjoint, s, body, x0, x1, x2, sign):
     """A point primitive's three rows of G, one side: for each dof c that moves ``body``,
     g[row:row + 3, c] += sign (v_c + ω_c × x), the velocity that dof gives the point x (its
     ρ rows (x × e_k, e_k) times S_c, without forming them)."""
@@ -163,9 +187,9 @@ def _point_rows(g, row, ji, pjoint, s, body, x, sign):
     while j >= 0:
         for c in range(ji[j, 4], ji[j, 4] + ji[j, 6]):
             w0, w1, w2 = s[0, c], s[1, c], s[2, c]
-            g[row, c] += sign * (s[3, c] + (w1 * x[2] - w2 * x[1]))
-            g[row + 1, c] += sign * (s[4, c] + (w2 * x[0] - w0 * x[2]))
-            g[row + 2, c] += sign * (s[5, c] + (w0 * x[1] - w1 * x[0]))
+            g[row, c] += sign * (s[3, c] + (w1 * x2 - w2 * x1))
+            g[row + 1, c] += sign * (s[4, c] + (w2 * x0 - w0 * x2))
+            g[row + 2, c] += sign * (s[5, c] + (w0 * x1 - w1 * x0))
         j = pjoint[ji[j, 1]] if ji[j, 1] >= 0 else -1
 
 
@@ -182,13 +206,13 @@ def _rho_row(g, row, ji, pjoint, s, body, rho):
 
 
 @inlined
-def _turn_row(g, row, ji, pjoint, s, body, axis, scale):
-    """A row whose ρ is (scale axis, 0), one side: g[row, c] += scale axis · ω_c for each dof
-    c that moves ``body``."""
+def _turn_row(g, row, ji, pjoint, s, body, n0, n1, n2, scale):
+    """A row whose ρ is (scale n, 0), one side: g[row, c] += scale n · ω_c for each dof c that
+    moves ``body``."""
     j = pjoint[body] if body >= 0 else -1
     while j >= 0:
         for c in range(ji[j, 4], ji[j, 4] + ji[j, 6]):
-            g[row, c] += scale * (axis[0] * s[0, c] + axis[1] * s[1, c] + axis[2] * s[2, c])
+            g[row, c] += scale * (n0 * s[0, c] + n1 * s[1, c] + n2 * s[2, c])
         j = pjoint[ji[j, 1]] if ji[j, 1] >= 0 else -1
 
 
