@@ -167,7 +167,8 @@ def _step(pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
     if status != OK:
         fail(istats, fstats, yfail, status, tb, ynew)
         return status
-    status = settle(pp, wp, ynew, fb, ta, tb, tw, moved, istats, fstats, acc_b, acc_u, yfail)
+    status = settle(pp, wp, ynew, fb, ta, tb, tw, moved, istats, fstats, acc_b, acc_u, yfail,
+                    False)  # the last evaluation (a stage, a Newton iterate) may be a step away
     if status != OK:
         return status
     kout = istats[4]

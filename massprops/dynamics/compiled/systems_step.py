@@ -19,6 +19,7 @@ from massprops.dynamics.compiled.systems_loops import (
     decompose,
     factor,
     min_norm,
+    terms,
 )
 from massprops.dynamics.compiled.systems_tree import FREE, INERTIA_SIZE, SPHERICAL, poses
 from massprops.dynamics.compiled.unowned import at, by_ref
@@ -151,13 +152,19 @@ def project(prog, ws, y, iterations, moved):
     """y moved onto Φ = 0, Φ̇ = 0 in place (System.project without fixed coordinates): status;
     moved[0] the sum of the position corrections' max-norms, moved[1] the velocity's, moved[2]
     the residual left when the loop cannot be closed (status UNCLOSED)."""
-    return project_ref(by_ref(prog), by_ref(ws), y, iterations, moved)
+    return project_ref(by_ref(prog), by_ref(ws), y, iterations, moved, False)
 
 
 @array_inner
-def project_ref(pp, wp, y, iterations, moved):
+def project_ref(pp, wp, y, iterations, moved, stale):
     """`project` with the program and workspace by reference (`unowned.by_ref`): the step
-    loops call it after every step, where passing the tuples themselves cost ~0.3 µs a call."""
+    loops call it after every step, where passing the tuples themselves cost ~0.3 µs a call.
+
+    ``stale``: the workspace holds M's factor and the pivoted QR of a nearby state (the step's
+    last evaluation), and the first correction uses them (a simplified Newton step, which meets
+    the residual test as an exact one would: the two states differ by about the step's local
+    error) instead of factoring M at y's q. Every later pass, and the last, which the velocity
+    projection and the right-hand side after it use, factors at its own q."""
     nq, m = at(pp, 0)[0], at(pp, 0)[2]
     moved[0] = moved[1] = 0.0
     if m == 0:
@@ -168,11 +175,18 @@ def project_ref(pp, wp, y, iterations, moved):
     phi, g, delta, row = at(wp, 19), at(wp, 23), at(wp, 37), at(wp, 36)
     nv = u.shape[0]
     done = 0
+    stale = stale and iterations > 0
     while True:  # Newton on Φ: `iterations` corrections at most, then Φ must be near round-off
         poses(pp, q, wp)  # (terms' Φ̈ reads a stale motion: it is not used here)
-        if not factor(pp, wp):
+        if stale:
+            terms(pp, wp)  # Φ here; M's factor and the QR stay the nearby state's
+        elif not factor(pp, wp):
             return LINALG
         residual = _largest(phi)
+        if residual <= atol and stale:  # the velocity projection needs this q's factors
+            stale = False
+            if not factor(pp, wp):
+                return LINALG
         if residual <= atol:
             break
         if done == iterations:
@@ -188,6 +202,7 @@ def project_ref(pp, wp, y, iterations, moved):
         moved[0] += worst
         _advance(pp, q, delta)
         done += 1
+        stale = False
     for i in range(m):
         x = 0.0
         for c in range(nv):
@@ -274,13 +289,14 @@ def fail(istats, fstats, yfail, status, t, y):
 
 
 @array_inner
-def settle(pp, wp, y, f, t_start, t, tw, moved, istats, fstats, acc_b, acc_u, yfail):
+def settle(pp, wp, y, f, t_start, t, tw, moved, istats, fstats, acc_b, acc_u, yfail, near):
     """What every method does after an accepted step from t_start to t (s), on its end y:
     y projected onto Φ = 0, Φ̇ = 0 and its quaternions renormalised, f = ẏ evaluated there
     (loads judged at tw), the singular-pose test (`accept`). OK, or the failure's status,
     recorded (`fail`); on CROSSED fstats[4] is where the crossing began (t itself when y is at
-    the pose)."""
-    status = project_ref(pp, wp, y, PROJECT_ITERATIONS, moved)
+    the pose). ``near``: the method's last evaluation was within its error of y, and the
+    projection's first correction may use its factors (`project_ref`'s ``stale``)."""
+    status = project_ref(pp, wp, y, PROJECT_ITERATIONS, moved, near)
     if status != OK:
         fstats[5] = moved[2]
         fail(istats, fstats, yfail, status, t, y)
@@ -305,7 +321,7 @@ def settle(pp, wp, y, f, t_start, t, tw, moved, istats, fstats, acc_b, acc_u, yf
 @array_inner
 def project_sample(pp, wp, row, t, moved, istats, fstats, yfail):
     """A dense-output sample ``row`` (at t) projected in place; OK or the failure, recorded."""
-    status = project_ref(pp, wp, row, PROJECT_ITERATIONS, moved)
+    status = project_ref(pp, wp, row, PROJECT_ITERATIONS, moved, False)
     if status != OK:
         fstats[5] = moved[2]
         fail(istats, fstats, yfail, status, t, row)
