@@ -249,24 +249,31 @@ def factor(pp, wp):
 
 @array_inner
 def decompose(pp, wp):
-    """The SVD of B (`factor` made it) for the singular-pose test (`systems_step.accept`): ws U
-    (m, kk), σ (kk,), V (nv, kk), kk = min(m, nv); ws[30] = [count kept, kept flags] (σ_j above
-    CONSTRAINT_RANK_RTOL of the largest)."""
-    bm, x, vs, sv, uo, vo = at(wp, 26), at(wp, 27), at(wp, 28), at(wp, 29), at(wp, 31), at(wp, 32)
+    """The SVD of B's independent part for the singular-pose test (`systems_step.accept`), from
+    `factor`'s pivoted QR of the same state (Bᵀ P = Q R, rank r; R's rows below r are under the
+    rank tolerance): B = P Rᵀ Qᵀ ≈ P W Q₁ᵀ, W = R[:r]ᵀ (m × r), Q₁ Q's first r columns, and
+    W's one-sided Jacobi SVD W Z = U_w Σ gives B's U = P U_w and V = Q₁ Z. A Jacobi SVD of B
+    itself (5 sweeps over 3 column pairs on the four-bar) cost ~3× as much at every accepted
+    step. ws U (m, kk), σ (kk,), V (nv, kk), kk = min(m, nv), columns r and on zero; ws[30] =
+    [count kept, kept flags] (σ_j above CONSTRAINT_RANK_RTOL of the largest)."""
+    bm, x, w, sv, uo, vo = at(wp, 26), at(wp, 27), at(wp, 28), at(wp, 29), at(wp, 31), at(wp, 32)
+    order, tau, z, col = at(wp, 39), at(wp, 40), at(wp, 42), at(wp, 33)
     nv, m = bm.shape[1], bm.shape[0]
-    kk = min(m, nv)
-    tall = nv <= m  # the one-sided Jacobi SVD wants rows >= columns: B or Bᵀ
-    rows, cols = (m, nv) if tall else (nv, m)
-    for i in range(rows):
-        for c in range(cols):
-            x[i, c] = bm[i, c] if tall else bm[c, i]
-    jacobi_svd(x, rows, cols, vs, sv)
-    left, right = (uo, vo) if tall else (vo, uo)  # B's U and V, or Bᵀ's (V and U of B)
-    for j in range(kk):
-        for i in range(rows):
-            left[i, j] = x[i, j] / sv[j] if sv[j] > 0 else 0.0
-        for i in range(cols):
-            right[i, j] = vs[i, j]
+    kk, r = min(m, nv), order[0]
+    for j in range(m):  # W = R[:r]ᵀ: R on and above x's diagonal (reflectors below it)
+        for k in range(r):
+            w[j, k] = x[k, j] if j >= k else 0.0
+    jacobi_svd(w, m, r, z, sv)
+    for c in range(kk):
+        for j in range(m):  # U = P U_w: W's row j is B's row order[1 + j]
+            uo[order[1 + j], c] = w[j, c] / sv[c] if c < r and sv[c] > 0 else 0.0
+        for i in range(nv):  # V = Q [Z; 0]
+            col[i] = z[i, c] if c < r and i < r else 0.0
+        apply_q(x, tau, r, nv, col, False)
+        for i in range(nv):
+            vo[i, c] = col[i] if c < r else 0.0
+        if c >= r:
+            sv[c] = 0.0
     top = 0.0
     for j in range(kk):
         top = max(top, sv[j])
