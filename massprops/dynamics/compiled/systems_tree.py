@@ -46,6 +46,30 @@ def rot_into(out, a, angle):
 
 
 @inlined
+def turn_between(pr, world, a, angle, kc, out):
+    """out = P Rot(a, angle) K (a unit; P = ``pr``, or E where ``world``; K = ``kc``), row by
+    row in scalars: no scratch matrix is stored and loaded back (see `_poses`)."""
+    s, c = math.sin(angle), math.cos(angle)
+    v = 1.0 - c
+    x, y, z = a[0], a[1], a[2]
+    q00, q01, q02 = c + x * x * v, x * y * v - z * s, x * z * v + y * s
+    q10, q11, q12 = y * x * v + z * s, c + y * y * v, y * z * v - x * s
+    q20, q21, q22 = z * x * v - y * s, z * y * v + x * s, c + z * z * v
+    for i in range(3):
+        if world:
+            m0, m1, m2 = (q00, q01, q02) if i == 0 else ((q10, q11, q12) if i == 1
+                                                           else (q20, q21, q22))
+        else:
+            p0, p1, p2 = pr[i, 0], pr[i, 1], pr[i, 2]
+            m0 = p0 * q00 + p1 * q10 + p2 * q20
+            m1 = p0 * q01 + p1 * q11 + p2 * q21
+            m2 = p0 * q02 + p1 * q12 + p2 * q22
+        out[i, 0] = m0 * kc[0, 0] + m1 * kc[1, 0] + m2 * kc[2, 0]
+        out[i, 1] = m0 * kc[0, 1] + m1 * kc[1, 1] + m2 * kc[2, 1]
+        out[i, 2] = m0 * kc[0, 2] + m1 * kc[1, 2] + m2 * kc[2, 2]
+
+
+@inlined
 def quat_into(out, q, o):
     """out = the rotation of the quaternion q[o:o + 4] = [w, x, y, z] (normalised here)."""
     n = math.sqrt(q[o] ** 2 + q[o + 1] ** 2 + q[o + 2] ** 2 + q[o + 3] ** 2)
@@ -173,32 +197,21 @@ def _poses(pp, q, wp):
                     _column(s, iu + c, w, px, py, pz, True)
             else:  # in the parent's frame (program entries 25 and 26)
                 a0, a1, kc = jaxp[k, 0], jaxp[k, 1], jrc0[k]
-                turned = True
-                if kind == REVOLUTE or kind == CYLINDRICAL:
-                    rot_into(qm, a0, q[iq])
-                elif kind == UNIVERSAL:
+                if kind == UNIVERSAL:
                     rot_into(tmp, a0, q[iq])
                     rot_into(rp, a1, q[iq + 1])
                     mm3(tmp, rp, qm, False)  # R(a0, q0) R(a1, q1)
-                else:  # prismatic, fixed: the child turns with its parent
-                    turned = False
-                if par >= 0:
-                    if turned:
+                    if par >= 0:
                         mm3(pr, qm, rp, False)
                         mm3(rp, kc, rot[ch], False)
                     else:
-                        mm3(pr, kc, rot[ch], False)
-                    for i in range(3):  # the first axis in the world
-                        w[i] = pr[i, 0] * a0[0] + pr[i, 1] * a0[1] + pr[i, 2] * a0[2]
-                else:
-                    if turned:
                         mm3(qm, kc, rot[ch], False)
-                    else:
-                        for i in range(3):
-                            for j in range(3):
-                                rot[ch, i, j] = kc[i, j]
-                    for i in range(3):
-                        w[i] = a0[i]
+                else:  # revolute, cylindrical: a turn about a0; prismatic, fixed: none
+                    turning = kind == REVOLUTE or kind == CYLINDRICAL
+                    turn_between(pr, par < 0, a0, q[iq] if turning else 0.0, kc, rot[ch])
+                for i in range(3):  # the first axis in the world
+                    w[i] = (pr[i, 0] * a0[0] + pr[i, 1] * a0[1] + pr[i, 2] * a0[2]) \
+                        if par >= 0 else a0[i]
                 if kind == PRISMATIC or kind == CYLINDRICAL:  # the shift q a along that axis
                     x = q[iq + 1] if kind == CYLINDRICAL else q[iq]
                     px, py, pz = px + x * w[0], py + x * w[1], pz + x * w[2]
@@ -218,7 +231,7 @@ def _poses(pp, q, wp):
                 com[ch, i] = (px if i == 0 else (py if i == 1 else pz)) - rc[i, 0] * jsc[k, 0] \
                     - rc[i, 1] * jsc[k, 1] - rc[i, 2] * jsc[k, 2]
         pts[k, 0], pts[k, 1], pts[k, 2] = px, py, pz
-        inertia_about_origin(bmass[ch], binertia[ch], rot[ch], com[ch], inert[ch], tmp)
+        inertia_about_origin(bmass[ch], binertia[ch], rot[ch], com[ch], inert[ch])
 
 
 @inlined
@@ -282,24 +295,38 @@ the products."""
 
 
 @inlined
-def inertia_about_origin(mass, inertia, r, c, out, tmp):
+def inertia_about_origin(mass, inertia, r, c, out):
     """out (10,) = the body's inertia about O (`INERTIA_SIZE`), from its mass, its inertia
-    about its centre of mass in body axes, R (body → world) and c (world): J_w = (R J) Rᵀ."""
-    for i in range(3):
-        for k in range(3):
-            tmp[i, k] = r[i, 0] * inertia[0, k] + r[i, 1] * inertia[1, k] \
-                + r[i, 2] * inertia[2, k]
+    about its centre of mass in body axes (symmetric), R (body → world) and c (world):
+    J_w = (R J) Rᵀ, in scalars, of J's symmetric part (a given J may be off by the tolerance
+    `model.RigidBody` allows)."""
+    j00, j11, j22 = inertia[0, 0], inertia[1, 1], inertia[2, 2]
+    j01 = 0.5 * (inertia[0, 1] + inertia[1, 0])
+    j02 = 0.5 * (inertia[0, 2] + inertia[2, 0])
+    j12 = 0.5 * (inertia[1, 2] + inertia[2, 1])
+    r00, r01, r02 = r[0, 0], r[0, 1], r[0, 2]
+    r10, r11, r12 = r[1, 0], r[1, 1], r[1, 2]
+    r20, r21, r22 = r[2, 0], r[2, 1], r[2, 2]
+    t00 = r00 * j00 + r01 * j01 + r02 * j02  # T = R J
+    t01 = r00 * j01 + r01 * j11 + r02 * j12
+    t02 = r00 * j02 + r01 * j12 + r02 * j22
+    t10 = r10 * j00 + r11 * j01 + r12 * j02
+    t11 = r10 * j01 + r11 * j11 + r12 * j12
+    t12 = r10 * j02 + r11 * j12 + r12 * j22
+    t20 = r20 * j00 + r21 * j01 + r22 * j02
+    t21 = r20 * j01 + r21 * j11 + r22 * j12
+    t22 = r20 * j02 + r21 * j12 + r22 * j22
     cx, cy, cz = c[0], c[1], c[2]
     cc = cx * cx + cy * cy + cz * cz
     out[0] = mass
     out[1], out[2], out[3] = mass * cx, mass * cy, mass * cz
-    for e in range(6):  # c̃c̃ = c cᵀ − |c|² E
-        i = e if e < 3 else (0 if e < 5 else 1)
-        j = e if e < 3 else (1 if e == 3 else 2)
-        ci = cx if i == 0 else (cy if i == 1 else cz)
-        cj = cx if j == 0 else (cy if j == 1 else cz)
-        out[4 + e] = tmp[i, 0] * r[j, 0] + tmp[i, 1] * r[j, 1] + tmp[i, 2] * r[j, 2] \
-            - mass * (ci * cj - (cc if i == j else 0.0))
+    # J_O = T Rᵀ - m c̃c̃, c̃c̃ = c cᵀ - |c|² E: [xx, yy, zz, xy, xz, yz]
+    out[4] = t00 * r00 + t01 * r01 + t02 * r02 - mass * (cx * cx - cc)
+    out[5] = t10 * r10 + t11 * r11 + t12 * r12 - mass * (cy * cy - cc)
+    out[6] = t20 * r20 + t21 * r21 + t22 * r22 - mass * (cz * cz - cc)
+    out[7] = t00 * r10 + t01 * r11 + t02 * r12 - mass * (cx * cy)
+    out[8] = t00 * r20 + t01 * r21 + t02 * r22 - mass * (cx * cz)
+    out[9] = t10 * r20 + t11 * r21 + t12 * r22 - mass * (cy * cz)
 
 
 @inlined
