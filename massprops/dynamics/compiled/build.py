@@ -33,7 +33,7 @@ def build(names: list[str] | None = None, jobs: int = 2) -> int:
     kernels = compiling.compiled_names(names or [*INTEGRATORS, compiling.SYSTEMS])
     scratch = Path(tempfile.mkdtemp(prefix="massprops-prebuild-"))
     try:
-        shares = compiling.balanced(kernels, jobs)  # the systems' kernel alone takes ~110 s
+        shares = compiling.balanced(kernels, jobs)  # the systems' kernel alone takes ~120 s
         env = dict(os.environ, NUMBA_CACHE_DIR=str(scratch),
                    PYTHONPATH=os.pathsep.join([str(PACKAGE.parent),
                                                os.environ.get("PYTHONPATH", "")]))

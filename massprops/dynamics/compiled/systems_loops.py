@@ -33,7 +33,7 @@ OK, LINALG, SINGULAR = 0, 6, 3
 @inlined
 def _point_motion(rot, com, vel, acc, body, local):
     """World position, velocity and acceleration (kinematics' A) of a body point: nine floats
-    (x, v, a), in scalars rather than scratch arrays (see `systems_tree._poses`)."""
+    (x, v, a), in scalars rather than scratch arrays (see `systems_tree.poses`)."""
     if body < 0:
         return local[0], local[1], local[2], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     r = rot[body]

@@ -48,7 +48,7 @@ def rot_into(out, a, angle):
 @inlined
 def turn_between(pr, world, a, angle, kc, out):
     """out = P Rot(a, angle) K (a unit; P = ``pr``, or E where ``world``; K = ``kc``), row by
-    row in scalars: no scratch matrix is stored and loaded back (see `_poses`)."""
+    row in scalars: no scratch matrix is stored and loaded back (see `poses`)."""
     s, c = math.sin(angle), math.cos(angle)
     v = 1.0 - c
     x, y, z = a[0], a[1], a[2]
@@ -121,29 +121,19 @@ def kinematics(pp, q, u, wp):
     """Per body: R, com, V and A at u̇ = 0 (with the joint's own bias term in ``cb``), the
     inertia about O (`inertia_about_origin`'s ten numbers); per dof a column of S; per joint
     its point (world); q itself where the system has couplings (ws[34], for
-    `systems_loops.terms`): `poses`, then `motion`."""
-    _poses(pp, q, wp)
-    _motion(pp, u, wp)
+    `systems_loops.terms`): `poses`, then `motion` (called, not inlined: `poses` alone takes
+    ~17 s to compile, and a copy inlined here would cost that again)."""
+    poses(pp, q, wp)
+    motion(pp, u, wp)
 
 
 @array_inner
 def poses(pp, q, wp):
-    """What `kinematics` computes from q alone: R, com, inertia, S, joint points (and q)."""
-    _poses(pp, q, wp)
-
-
-@array_inner
-def motion(pp, u, wp):
-    """What `kinematics` computes from u, after `poses`: V, A at u̇ = 0 and ``cb``."""
-    _motion(pp, u, wp)
-
-
-@inlined
-def _poses(pp, q, wp):
-    """`poses`. The parent's pose is read in place and the child's motion built in scalars,
-    not copied through scratch arrays: a store to one float array may alias a load from another,
-    so each copied value was reloaded at every use (with `_motion`'s scalars, measured on the
-    four-bar: 733 → ~510 ns)."""
+    """What `kinematics` computes from q alone: R, com, inertia, S, joint points (and q). The
+    parent's pose is read in place and the child's rotation and inertia built in scalars, not
+    through scratch arrays: numba cannot tell that a store into one float array leaves another
+    alone, so each copied value was loaded again at every use (with `motion`'s scalars, the
+    four-bar's kinematics 767 → 365 ns)."""
     ji, jsp, jsc, jrp0 = at(pp, 1), at(pp, 3), at(pp, 4), at(pp, 5)
     bmass, binertia, brot0, bcom0 = at(pp, 7), at(pp, 8), at(pp, 9), at(pp, 10)
     jaxp, jrc0 = at(pp, 25), at(pp, 26)
@@ -234,9 +224,10 @@ def _poses(pp, q, wp):
         inertia_about_origin(bmass[ch], binertia[ch], rot[ch], com[ch], inert[ch])
 
 
-@inlined
-def _motion(pp, u, wp):
-    """`motion`: per joint, from its parent's V and A (the world's: 0) and its S columns."""
+@array_inner
+def motion(pp, u, wp):
+    """What `kinematics` computes from u, after `poses`: V, A at u̇ = 0 and ``cb``, per joint
+    from its parent's V and A (the world's: 0) and its S columns."""
     ji = at(pp, 1)
     vel, acc, s, cb = at(wp, 2), at(wp, 3), at(wp, 5), at(wp, 7)
     v6 = at(wp, 10)
