@@ -35,10 +35,10 @@ def _multipliers(g: np.ndarray, motor: np.ndarray, act: np.ndarray,
     the first, then the least squares in the null space of G[:, passive]ᵀ."""
     lam = np.zeros(g.shape[0])
     basis = np.eye(g.shape[0])
-    if passive.size:
-        lam = np.linalg.lstsq(g[:, passive].T, motor[passive], rcond=None)[0]
-        _, sv, vt = np.linalg.svd(g[:, passive].T)
+    if passive.size:  # one SVD of G[:, passive]ᵀ gives both
+        uu, sv, vt = np.linalg.svd(g[:, passive].T)
         rank = int(np.sum(sv > 1e-12 * (sv[0] if sv.size else 0.0)))
+        lam = vt[:rank].T @ ((uu[:, :rank].T @ motor[passive]) / sv[:rank])
         basis = vt[rank:].T
     if act.size and basis.shape[1]:
         rest = motor[act] - g[:, act].T @ lam

@@ -82,11 +82,7 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors:
     while kout < len(t_out) and t_out[kout] <= 0.0:
         run.y_out[kout] = y
         kout += 1
-    m, nv = system.m, system.nv
-    istats = np.array([0, 0, 0, codes.OK, kout, -1,
-                       -1 if system.rank is None else system.rank], dtype=np.int64)
-    fstats = np.array([0.0, 0.0, system.margin, 0.0, 0.0, 0.0, 1.0])
-    accepted_b, accepted_u = np.zeros((m, nv)), np.zeros((m, max(m, nv)))
+    istats, fstats, accepted_b, accepted_u = _run_arrays(system, kout)
     yfail = np.zeros(y.size)
     for t0, t1 in zip(edges[:-1], edges[1:]):
         within = scales.copy()  # each segment's error scales start from y0's running maxima
@@ -110,6 +106,16 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors:
     return run
 
 
+def _run_arrays(system, kout: int) -> tuple:
+    """A fresh run's istats and fstats (`systems_dop853`'s layout; the next output ``kout``)
+    and its last accepted B and U (none yet)."""
+    m, nv = system.m, system.nv
+    istats = np.array([0, 0, 0, codes.OK, kout, -1,
+                       -1 if system.rank is None else system.rank], dtype=np.int64)
+    fstats = np.array([0.0, 0.0, system.margin, 0.0, 0.0, 0.0, 1.0])
+    return istats, fstats, np.zeros((m, nv)), np.zeros((m, max(m, nv)))
+
+
 def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales: np.ndarray,
             floors: np.ndarray) -> tuple[float, float, bool]:
     """Where in [low, high] (s) a step crossed a singular pose: that stretch is run again from
@@ -122,10 +128,7 @@ def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales:
     y_low, n = np.array(y, dtype=float), y.size
     for k in range(NARROW_RUNS):
         trial = y_low.copy()
-        istats = np.array([0, 0, 0, codes.OK, 0, -1, system.rank], dtype=np.int64)
-        fstats = np.array([0.0, 0.0, system.margin, 0.0, 0.0, 0.0, 1.0])
-        accepted_b = np.zeros((system.m, system.nv))
-        accepted_u = np.zeros((system.m, max(system.m, system.nv)))
+        istats, fstats, accepted_b, accepted_u = _run_arrays(system, 0)
         scales_k = np.maximum(np.maximum(np.abs(trial), floors), scales)
         edges = np.linspace(low, high, NARROW_PIECES + 1)
         for a, b in zip(edges[:-1], edges[1:]):

@@ -83,18 +83,17 @@ def build_program(system) -> tuple:
         lf[k] = [sj.stiffness, sj.rest, sj.damping, sj.drive, sj.start, sj.end]
     ci, cf = _cut_loads(scene, tree)
     dims = np.array([tree.nq, tree.nv, system.m, n, nj], np.int64)
+    rot0 = np.array([b.rotation0 for b in bodies], float).reshape(n, 3, 3)
     out = (dims, ji, axes, sp, sc, rp0, parent_joint,
            np.array([b.mass for b in bodies], float),
-           np.array([b.inertia for b in bodies], float).reshape(n, 3, 3),
-           np.array([b.rotation0 for b in bodies], float).reshape(n, 3, 3),
+           np.array([b.inertia for b in bodies], float).reshape(n, 3, 3), rot0,
            np.array([b.com0 for b in bodies], float).reshape(n, 3),
            np.asarray(system.weights, float).reshape(n, 3), pi, pf, fi, ff, si, sf, li, lf,
            np.array([tree.size, tolerances.CONSTRAINT_RANK_RTOL,
                      tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size,
                      tolerances.NEAR_SINGULAR_MARGIN]), ci, cf, *_couplings(tree, row),
            np.einsum("kji,kaj->kai", rp0, axes),  # R_p0ᵀ a: the axes in the parent's frame
-           np.einsum("kji,kjl->kil", rp0, np.array([bodies[j.child].rotation0 for j in joints],
-                                                    float).reshape(nj, 3, 3)))
+           np.einsum("kji,kjl->kil", rp0, rot0[ji[:, 2]]))  # R_p0ᵀ R_c0
     return tuple(np.ascontiguousarray(a) for a in out)
 
 

@@ -34,14 +34,14 @@ def fastest_rate(system, y0: np.ndarray) -> float:
     if getattr(system, "fastest_rate", None) is not None:
         return system.fastest_rate
     # deferred: numba's kernels, only for this estimate
-    from massprops.dynamics.compiled.systems_step import rhs, workspace
+    from massprops.dynamics.compiled.systems_step import OK, rhs, workspace
     from massprops.dynamics.systems.tree import qdot
 
     ws = workspace(system.program)
 
     def f(y: np.ndarray) -> np.ndarray:
         out = np.empty_like(y)
-        if rhs(system.program, ws, 0.0, y, out, -1) == 0:
+        if rhs(system.program, ws, 0.0, y, out, -1) == OK:
             return out
         udot = system.solve(0.0, y, check=False, full=False).udot  # says what went wrong
         return np.concatenate([qdot(system.tree, y[:system.nq], y[system.nq:]), udot])
