@@ -151,6 +151,16 @@ def test_kernels_built_with_the_package_load_without_compiling_wherever_it_is_in
     assert probe["exit"] == 0 and probe["numba"] is True
     assert errors == []  # loaded: numba compiled nothing
     (cache,) = (tmp_path / "home" / "massprops").iterdir()
-    assert (cache / ".prebuilt-seeded").exists()
+    assert len(list(cache.glob(".prebuilt-seeded-*"))) == 1
     here = run("simulate", scene, "--json", "-q")
     assert json.loads(stdout)["final"] == json.loads(here.stdout)["final"]
+    # a second copy of the same version (another venv) in the same home: its own kernels are
+    # seeded too (numba keys each copy's by its path), not compiled again
+    shutil.copytree(tmp_path / "build" / "massprops", tmp_path / "site2" / "massprops")
+    env["PYTHONPATH"] = str(tmp_path / "site2")
+    stdout2, errors2, probe2 = fresh_process(None, "simulate", scene, "--json", "-q", env=env,
+                                             cwd=tmp_path)
+    assert probe2["file"].startswith(str(tmp_path / "site2")) and probe2["exit"] == 0
+    assert errors2 == []  # loaded: numba compiled nothing
+    assert len(list(cache.glob(".prebuilt-seeded-*"))) == 2
+    assert json.loads(stdout2)["final"] == json.loads(stdout)["final"]

@@ -31,8 +31,11 @@ PACKAGE = Path(__file__).resolve().parents[2]
 FOLDER = Path(__file__).resolve().parent / "_prebuilt"
 MANIFEST = "manifest.json"
 MARKER = ".prebuilt-seeded"
-"""Left in a cache folder once `seed` has looked at it (copied or not): it never copies twice,
-so kernels a user deletes are compiled, not restored."""
+"""Left in a cache folder, one per installed copy of the package (named after the copy's numba
+subfolder), once `seed` has looked at it for that copy (copied or not): it never copies twice,
+so kernels a user deletes are compiled, not restored. Per copy, because the folder is shared by
+every copy of the same sources (keyed by their hash) while numba keeps each copy's kernels
+under its own path: one marker for all left a second venv of the same version compiling."""
 
 
 def made_with() -> dict:
@@ -55,12 +58,12 @@ def seed(cache: Path) -> int:
     """Copy the shipped kernels into numba's cache folder ``cache`` unless it was seeded before
     or they were made with other versions; returns the number of files copied. Never raises
     for want of files or permissions: the kernels are then compiled on first use."""
-    marker = cache / MARKER
     try:
+        marker = cache / f"{MARKER}-{_cache_subpath(PACKAGE)}"
         if marker.exists():
             return 0
         manifest = json.loads((FOLDER / MANIFEST).read_text())
-    except (OSError, ValueError):
+    except (OSError, ValueError, ImportError):
         return 0
     count = 0
     # a manifest or numba layout not as expected, or a cache we cannot write: what was not
