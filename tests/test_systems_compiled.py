@@ -46,6 +46,22 @@ forces:
      rest_length: 0.4, damping: 0.2}}
   - {{type: spring, bodies: [d, f], points: [[0.3, 0.1, -2.0], [3.0, 1.0, 0.0]],
      stiffness: 1.0, damping: 0.1}}
+  - {{type: drag, body: e, linear: 0.4, angular: 0.05}}
+  - {{type: drag, linear: 0.01}}
+time: {{duration: 1.0}}
+"""
+
+THROWN_DRAG = f"""bodies:
+  a: {{mass: 1.0, inertia: {BOX}, position: [0, 0, 0]}}
+  b: {{mass: 0.6, inertia: {BOX}, position: [0.4, 0, 0.1]}}
+joints:
+  - {{name: h, type: revolute, bodies: [a, b], point: [0.2, 0, 0], axis: [0, 1, 0]}}
+initial:
+  bodies: {{a: {{velocity: [3, 0, 2], angular_velocity: [0.2, 0.5, -0.1]}}}}
+  rates: {{h: 0.8}}
+forces:
+  - {{type: gravity, g: [0, 0, -9.81]}}
+  - {{type: drag, body: b, linear: 0.3, angular: 0.02}}
 time: {{duration: 1.0}}
 """
 
@@ -86,11 +102,14 @@ def _turned_four_bar() -> str:
     return yaml.safe_dump(data)
 
 
-@pytest.mark.parametrize("scene", ["every_kind", "four_bar", "four_bar_turned", "chain10",
-                                   "andrews", "slider_crank", "double_pendulum"])
+@pytest.mark.parametrize("scene", ["every_kind", "thrown_drag", "four_bar", "four_bar_turned",
+                                   "chain10", "andrews", "slider_crank", "double_pendulum"])
 def test_compiled_right_hand_side_and_projection_equal_numpy(scene):
     if scene == "every_kind":
         loaded = parse_system(EVERY_KIND, source="k.yaml", base_dir=SAMPLES)
+    elif scene == "thrown_drag":  # a floating base with drag: it runs in the world frame
+        loaded = parse_system(THROWN_DRAG, source="f.yaml", base_dir=SAMPLES)
+        assert prepare(loaded)[0].falling is None
     elif scene == "four_bar_turned":
         loaded = parse_system(_turned_four_bar(), source="t.yaml", base_dir=SAMPLES)
         assert (loaded.bodies and prepare(loaded)[0].rank) == 2

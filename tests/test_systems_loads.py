@@ -49,6 +49,43 @@ def test_two_free_bodies_on_a_spring():
     assert np.allclose(s.position[:, 0, 0] + s.position[:, 1, 0], d0, atol=1e-12)  # momentum
 
 
+def test_drag_on_a_thrown_body_and_on_a_pendulum():
+    """Linear drag c and gravity g on a free body: v(t) = v∞ + (v0 − v∞) e^(−kt), k = c / m,
+    v∞ = g / k; angular drag a on an isotropic inertia I: ω(t) = ω0 e^(−a t / I). On a
+    pendulum: no energy drift is claimed under drag, and it slows the swing."""
+    c, a, m, inertia = 0.8, 0.05, 2.0, 0.1
+    v0, w0, g = np.array([3.0, -1.0, 4.0]), np.array([0.3, 2.0, -1.0]), np.array([0, 0, -9.81])
+    text = (f"bodies:\n  b: {BOX}position: [0, 0, 0]}}\n"
+            f"initial: {{bodies: {{b: {{velocity: {v0.tolist()}, "
+            f"angular_velocity: {w0.tolist()}}}}}}}\n"
+            "forces:\n  - {type: gravity, g: [0, 0, -9.81]}\n"
+            f"  - {{type: drag, linear: {c}, angular: {a}}}\n"
+            "time: {duration: 2.0}\n")
+    s = _run(text, every=0.5, rtol=1e-12).samples
+    k, t = c / m, s.t[:, None]
+    terminal = g / k
+    v = terminal + (v0 - terminal) * np.exp(-k * t)
+    x = terminal * t + (v0 - terminal) * (1 - np.exp(-k * t)) / k
+    assert np.allclose(s.velocity[:, 0], v, rtol=0, atol=1e-10)
+    assert np.allclose(s.position[:, 0], x, rtol=0, atol=1e-10)
+    assert np.allclose(s.angular_velocity[:, 0], w0 * np.exp(-a * t / inertia), atol=1e-10)
+    pendulum = (f"bodies:\n  r: {ROD}position: [0, 0, -0.5]}}\n"
+                "joints:\n  - {name: h, type: revolute, bodies: [world, r], point: [0, 0, 0], "
+                "axis: [0, 1, 0]}\ninitial: {rates: {h: 3.0}}\n"
+                "forces:\n  - {type: gravity, g: [0, 0, -9.81]}\n")
+    def energy(samples) -> np.ndarray:  # the rod swings about y: its moment there is 0.0834
+        v, w, z = samples.velocity[:, 0], samples.angular_velocity[:, 0], samples.position[:, 0, 2]
+        return 0.5 * np.sum(v * v, axis=1) + 0.5 * 0.0834 * w[:, 1] ** 2 + 9.81 * z
+
+    free = energy(_run(pendulum + "time: {duration: 2.0}\n", every=0.1).samples)
+    dragged = _run(pendulum + "  - {type: drag, body: r, linear: 0.2}\ntime: {duration: 2.0}\n",
+                   every=0.1)
+    assert dragged.diagnostics["energy_rel_drift"] is None  # drag: no energy to conserve
+    assert np.ptp(free) < 1e-9 * abs(free[0])
+    lost = energy(dragged.samples)
+    assert np.all(np.diff(lost) < 0) and lost[-1] < free[0] - 0.05 * abs(free[0])
+
+
 def test_constant_force_and_drive():
     text = (f"bodies:\n  f: {BOX}position: [0, 0, 0]}}\n  r: {ROD}position: [5, 0, 0]}}\n"
             "joints:\n  - {name: h, type: revolute, bodies: [world, r], point: [5, 0, 0], "

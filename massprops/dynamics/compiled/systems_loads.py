@@ -31,6 +31,9 @@ def applied(pp, t, q, u, wp):
         if not ff[f, 6] <= t < ff[f, 7]:
             continue
         b = fi[f, 1]
+        if fi[f, 0] == 2:  # drag, in the world frame (`falling` leaves a dragged system there)
+            _drag(ff[f, 0], ff[f, 1], com[b], vel[b], fext[b], x, vec)
+            continue
         for i in range(3):
             vec[i] = ff[f, i]
             if fi[f, 2]:  # body frame
@@ -141,6 +144,19 @@ def _cut_loads(ci, cf, t, rot, com, vel, fext, v3):
             if a >= 0:
                 fext[a, i] -= x[i]
                 fext[a, 3 + i] -= sb[i]
+
+
+@inlined
+def _drag(linear, angular, c, v, out, x, force):
+    """Adds a drag's spatial force about O to ``out`` (6,): −linear v_c at the centre ``c``
+    and −angular ω, v = (ω, v_O) the body's spatial velocity."""
+    force[0] = -linear * (v[3] + v[1] * c[2] - v[2] * c[1])
+    force[1] = -linear * (v[4] + v[2] * c[0] - v[0] * c[2])
+    force[2] = -linear * (v[5] + v[0] * c[1] - v[1] * c[0])
+    cross_into(x, c, force)
+    for i in range(3):
+        out[i] += x[i] - angular * v[i]
+        out[3 + i] += force[i]
 
 
 @inlined

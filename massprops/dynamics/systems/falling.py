@@ -80,11 +80,13 @@ class Falling:
 
 def falling_frame(scene: SystemScene, tree: Tree, y0: np.ndarray) -> Falling | None:
     """The falling frame of ``scene`` started at ``y0`` (its tree's state), or None where the
-    world holds the system (a joint, spring or cut to the world) or the frame would not move
-    (no gravity, the centre at rest)."""
+    world holds the system (a joint, spring or cut to the world, or drag) or the frame would
+    not move (no gravity, the centre at rest)."""
     if any(WORLD in (j.a, j.b) for j in scene.joints) \
             or any(WORLD in (s.a, s.b) for s in scene.springs):
         return None
+    if any(d.linear or d.angular for d in scene.drags):  # drag holds it back against the air,
+        return None  # at rest in the world: a frame falling freely would leave it behind
     nq = tree.nq
     kin = tr.kinematics(tree, y0[:nq], y0[nq:])
     masses = np.array([b.mass for b in tree.bodies], dtype=float)

@@ -81,8 +81,10 @@ def is_stiff(name: str) -> bool:
 
 
 def _sprung(scene) -> bool:
-    """A spring or damper anywhere (between bodies or on a joint): the only stiff terms."""
-    return bool(scene.springs) or any(j.stiffness or j.damping for j in scene.joints)
+    """A spring or damper anywhere (between bodies, on a joint, a body's drag): the only stiff
+    terms."""
+    return bool(scene.springs or scene.drags) or any(j.stiffness or j.damping
+                                                      for j in scene.joints)
 
 
 COMPANION_GROWTH = 3

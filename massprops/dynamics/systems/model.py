@@ -109,6 +109,16 @@ class BodySpring:
 
 
 @dataclass(frozen=True, eq=False)
+class BodyDrag:
+    """Drag on ``body``: the force −linear·v at its centre of mass and the torque −angular·ω,
+    v and ω its world velocities (N·s/m, N·m·s/rad; the one-body `model.Drag`)."""
+
+    body: int
+    linear: float = 0.0
+    angular: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
 class SystemInitial:
     """positions / rates: joint name -> tuple of values (rad, m; rad/s, m/s); velocities: body
     name -> (velocity (3,), angular velocity (3,)) world, for floating bodies;
@@ -138,6 +148,7 @@ class SystemScene:
     places: dict = field(default_factory=dict)  # "initial.positions.A" -> "file:line: key: "
     robot: str | None = None  # the description a `model:` scene names (outputs add `holding`)
     couplings: tuple[JointCoupling, ...] = ()  # a description's mimic/equality relations
+    drags: tuple[BodyDrag, ...] = ()
 
     @property
     def size(self) -> float:

@@ -10,12 +10,14 @@ A tuple of C-contiguous arrays, int64 or float64, in this order (the kernels ind
  7 mass (n,); 8 inertia (n, 3, 3) body axes; 9 rotation0 (n, 3, 3); 10 com0 (n, 3);
  11 weight (n, 3) m g, N;
  12 primitives (np, 4) int [kind (PRIM), a, b, first row]; 13 (np, 13) [pa, pb, ea, nb, length];
- 14 forces (nf, 4) int [0 force / 1 torque, body, body frame, at a point];
- 15 (nf, 8) [vector, point in the body frame, start, end];
+ 14 forces (nf, 4) int [0 force / 1 torque / 2 drag, body, body frame, at a point];
+ 15 (nf, 8) [vector, point in the body frame, start, end]; a drag's [linear, angular, 0, ...,
+   -inf, inf];
  16 springs (ns, 2) int [a, b]; 17 (ns, 9) [point on a, point on b, stiffness, rest, damping];
  18 loaded tree joints (nl,) int; 19 (nl, 6) [stiffness, rest, damping, drive, start, end];
- 20 (3,) [system size m, CONSTRAINT_RANK_RTOL, the projection's position tolerance m]: the
-   tolerances travel as data, so a compiled kernel never holds a stale copy of one;
+ 20 (4,) [system size m, CONSTRAINT_RANK_RTOL, the projection's position tolerance m,
+   NEAR_SINGULAR_MARGIN]: the tolerances travel as data, so a compiled kernel never holds a
+   stale copy of one;
  21 loaded cut joints (nc, 3) int [0 revolute / 1 prismatic, a, b]; 22 (nc, 21) [axis in a's
    frame, the normal the turn is measured from in a's frame and in b's, the joint point in a's
    and in b's frame, stiffness, rest, damping, drive, start, end] (`cutjoint`; body frames,
@@ -66,11 +68,15 @@ def build_program(system) -> tuple:
         pi[k] = [PRIM[p.kind], p.a, p.b, row]
         pf[k] = [*p.pa, *p.pb, *p.ea, *p.nb, p.length]
         row += p.rows
-    fi = np.zeros((len(scene.forces), 4), np.int64)
-    ff = np.zeros((len(scene.forces), 8))
+    nf = len(scene.forces)
+    fi = np.zeros((nf + len(scene.drags), 4), np.int64)
+    ff = np.zeros((nf + len(scene.drags), 8))
     for k, (f, local) in enumerate(zip(scene.forces, system.force_local)):
         fi[k] = [int(f.kind == "torque"), f.body, int(f.frame == "body"), int(local is not None)]
         ff[k] = [*f.vector, *(local if local is not None else np.zeros(3)), f.start, f.end]
+    for k, d in enumerate(scene.drags, start=nf):
+        fi[k] = [2, d.body, 0, 0]
+        ff[k] = [d.linear, d.angular, 0, 0, 0, 0, -np.inf, np.inf]
     si = np.zeros((len(scene.springs), 2), np.int64)
     sf = np.zeros((len(scene.springs), 9))
     for k, (s, (la, lb)) in enumerate(zip(scene.springs, system.spring_local)):

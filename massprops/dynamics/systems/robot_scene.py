@@ -90,11 +90,11 @@ def parse_model_scene(text: str, *, source: str, base_dir: Path) -> SystemScene:
     desc = describe(file, inertials=inertials, base=base)
     index = {b.name: i for i, b in enumerate(desc.bodies)}
     places: dict[str, str] = {}
-    gravity, forces, springs = _forces(fields.get("forces"), index)
+    gravity, forces, springs, drags = _forces(fields.get("forces"), index)
     initial = _initial(fields.get("initial"), index, {j.name for j in desc.joints}, places)
     time = system_time(fields["time"])
     output = _output(fields.get("output"), base_dir)
-    return _scene(desc, gravity, forces, springs, initial, time, output, source, places)
+    return _scene(desc, gravity, forces, springs, initial, time, output, source, places, drags)
 
 
 def description_scene(path: str | os.PathLike, *, duration: float = 1.0) -> SystemScene:
@@ -121,7 +121,7 @@ def _leaders_kept(desc: Description, positions: dict) -> dict:
 
 
 def _scene(desc: Description, gravity, forces, springs, initial, time, output, source: str,
-           places: dict) -> SystemScene:
+           places: dict, drags=()) -> SystemScene:
     if not desc.bodies:
         raise SceneError(f"{desc.path}: every link is welded to the world: nothing moves "
                          "(base: floating frees the base)")
@@ -133,6 +133,6 @@ def _scene(desc: Description, gravity, forces, springs, initial, time, output, s
     scene = SystemScene(desc.bodies, desc.joints, gravity, tuple(forces), tuple(springs),
                         initial, time, output, source=source, input_files=(desc.path,),
                         warnings=desc.warnings, places=places, robot=os.fspath(desc.path),
-                        couplings=desc.couplings)
+                        couplings=desc.couplings, drags=tuple(drags))
     check_mass_matrix(scene)
     return scene

@@ -31,6 +31,7 @@ from massprops.dynamics.scene import (
 from massprops.dynamics.systems.model import (
     ONE_AXIS,
     WORLD,
+    BodyDrag,
     BodyForce,
     BodySpring,
     SystemBody,
@@ -98,7 +99,7 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
     specs, names = _bodies(fields["bodies"], base_dir, places)
     index = {name: i for i, name in enumerate(names)}
     joints = _joints(fields.get("joints"), index, places)
-    gravity, forces, springs = _forces(fields.get("forces"), index)
+    gravity, forces, springs, drags = _forces(fields.get("forces"), index)
     initial = _initial(fields.get("initial"), index, {j.name for j in joints}, places)
     time = system_time(fields["time"])
     output = _output(fields.get("output"), base_dir)
@@ -114,7 +115,7 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
     joints = tuple(_fixed_point(j, bodies) for j in joints)
     return SystemScene(tuple(bodies), joints, gravity, forces, springs, initial, time, output,
                        source=source, input_files=tuple(inputs), warnings=tuple(warnings),
-                       places=places)
+                       places=places, drags=drags)
 
 
 def system_time(field: Field) -> TimeSettings:
@@ -281,17 +282,24 @@ def _forces(field: Field | None, index: dict):
     gravity = np.zeros(3)
     forces: list[BodyForce] = []
     springs: list[BodySpring] = []
+    drags: list[BodyDrag] = []
     if is_null(field):
-        return gravity, (), ()
+        return gravity, (), (), ()
     if not isinstance(field.node, yaml.SequenceNode):
         raise field.error(f"expected a list of forces, got {shown(field.node)}")
     for i, node in enumerate(field.node.value):
         item = field.child(node, i)
-        kind = read_type(item, ("gravity", "force", "torque", "spring"), "force type",
+        kind = read_type(item, ("gravity", "force", "torque", "spring", "drag"), "force type",
                          expected="expected a force mapping", missing="missing; one of: ")
         if kind == "gravity":
             f = read_mapping(item, ("type", "g"), {"g": "g: [0, 0, -9.81]"})
             gravity = gravity + read_vector(f["g"])
+        elif kind == "drag":  # on the named body, or on every body as gravity
+            f = read_mapping(item, ("type", "body", "linear", "angular"))
+            which = [_body_ref(f["body"], index, allow_world=False)] if "body" in f \
+                else range(len(index))
+            values = {key: read_non_negative(f[key]) for key in ("linear", "angular") if key in f}
+            drags += [BodyDrag(b, **values) for b in which]
         elif kind in ("force", "torque"):
             keys = ("type", "body", "vector", "frame", "start", "end",
                     *(("point",) if kind == "force" else ()))
@@ -316,7 +324,7 @@ def _forces(field: Field | None, index: dict):
                                       read_non_negative(f["rest_length"])
                                       if "rest_length" in f else 0.0,
                                       read_non_negative(f["damping"]) if "damping" in f else 0.0))
-    return readonly_array(gravity.tolist()), tuple(forces), tuple(springs)
+    return readonly_array(gravity.tolist()), tuple(forces), tuple(springs), tuple(drags)
 
 
 # --- initial ------------------------------------------------------------------------------------

@@ -107,6 +107,11 @@ class System:
                 if body != WORLD:
                     fext[body, :3] += sign * cross(x, force)
                     fext[body, 3:] += sign * force
+        for d in self.scene.drags:  # in the world frame (`falling` leaves a dragged system there)
+            w = kin.V[d.body, :3]
+            f = -d.linear * (kin.V[d.body, 3:] + cross(w, kin.com[d.body]))
+            fext[d.body, :3] += cross(kin.com[d.body], f) - d.angular * w
+            fext[d.body, 3:] += f
         cutjoint.add_loads(self.tree, self.scene, t, kin, fext)
         tau = np.zeros(self.nv)
         for k in self.tree.loaded:
@@ -244,14 +249,15 @@ class System:
         return float(e + cutjoint.energy(self.tree, self.scene, kin))
 
     def conservative(self) -> bool:
-        """Energy is conserved: no body forces or torques, no dampers or drives."""
-        if not self.cannot_gain_energy() or any(s.damping for s in self.scene.springs):
+        """Energy is conserved: no body forces or torques, no dampers, drag or drives."""
+        if not self.cannot_gain_energy() or any(s.damping for s in self.scene.springs) \
+                or any(d.linear or d.angular for d in self.scene.drags):
             return False
         return not any(j.damping for j in self.scene.joints)
 
     def cannot_gain_energy(self) -> bool:
         """No term does work on the system from outside: no body forces or torques, no drives
-        (gravity, springs and dampers only)."""
+        (gravity, springs, dampers and drag only)."""
         return not (self.scene.forces or any(j.drive for j in self.scene.joints))
 
 
