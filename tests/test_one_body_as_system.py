@@ -45,7 +45,7 @@ REACTION_SAFETY = 10.0
 and the orientation error turns the weight, so its relative error is a few times the state's."""
 
 SAMPLES = {
-    # name: shortened duration (s); every sample scene with `body:` and without drag
+    # name: shortened duration (s); every sample scene with `body:`
     "compound_pendulum": 2.0,  # a revolute joint: swings from upright through the bottom
     "far": 1.0,
     "heavy_top_damped": 0.005,  # 4.6e6/s damping: dop853 takes ~4600 steps
@@ -55,6 +55,7 @@ SAMPLES = {
     "needle": 0.5,
     "short_window": 1.0,
     "unstable": 0.2,
+    "tiny": 0.5,  # drag
     # closed-form scenes (auto picks exact), stepped here all the same: the spherical joint's
     # only samples, and a mesh whose principal axes and COM are off the mesh frame's
     "heavy_top": 1.0,
@@ -63,7 +64,6 @@ SAMPLES = {
     "disk": 0.2,
     "separatrix": 5.0,
 }
-"""tiny.yaml has drag, which the systems engine does not have yet (test_drag_is_refused)."""
 
 
 def _shortened(scene, duration: float):
@@ -338,10 +338,3 @@ def test_translation_of_the_body_and_its_start():
     assert np.allclose(joint.axes[0], turned, rtol=0, atol=1e-15)
     assert hinge.initial.rates == {"j0": pytest.approx((1.5 * math.sqrt(2),), rel=1e-14)}
     assert hinge.initial.velocities == {}
-
-
-def test_drag_is_refused():
-    """The systems engine has no drag yet: the translation says so rather than drop it."""
-    scene = load_scene(SCENES / "tiny.yaml")
-    with pytest.raises(NotImplementedError, match="^drag$"):
-        as_system(scene)

@@ -28,6 +28,7 @@ from massprops.dynamics.joints.model import RevoluteJoint, SphericalJoint
 from massprops.dynamics.model import Drag, Gravity, PointForce, Scene, Spring, Torque
 from massprops.dynamics.systems.model import (
     WORLD,
+    BodyDrag,
     BodyForce,
     BodySpring,
     SystemBody,
@@ -45,8 +46,7 @@ BODY = "body"
 
 def as_system(scene: Scene) -> SystemScene:
     """The system of one body that moves as ``scene`` does (a validated, bound `Scene`, as
-    `dynamics.scene.load_scene` returns it). Raises NotImplementedError("drag") for a drag term:
-    the systems engine has none yet.
+    `dynamics.scene.load_scene` returns it).
 
     ``time`` is carried over as it is: a one-body-only method it names (exact, splitting*) is
     refused by `run.simulate_system` unless the caller names a system method. The scene's
@@ -68,6 +68,7 @@ def as_system(scene: Scene) -> SystemScene:
     gravity = np.zeros(3)
     forces: list[BodyForce] = []
     springs: list[BodySpring] = []
+    drags: list[BodyDrag] = []
     for term in scene.forces:
         if isinstance(term, Gravity):
             gravity = gravity + np.asarray(term.g, np.float64)
@@ -85,7 +86,7 @@ def as_system(scene: Scene) -> SystemScene:
                                       float(term.stiffness), float(term.rest_length),
                                       float(term.damping)))
         elif isinstance(term, Drag):
-            raise NotImplementedError("drag")
+            drags.append(BodyDrag(0, float(term.linear), float(term.angular)))
         else:  # a new one-body force kind must be translated here before it can run as a system
             raise NotImplementedError(type(term).__name__)
 
@@ -97,7 +98,8 @@ def as_system(scene: Scene) -> SystemScene:
                                 BODY: (np.array(ini.velocity, np.float64), omega_world)})
     return SystemScene((system_body,), joints, gravity, tuple(forces), tuple(springs), initial,
                        scene.time, scene.output, source=scene.source,
-                       input_files=tuple(scene.input_files), warnings=tuple(scene.warnings))
+                       input_files=tuple(scene.input_files), warnings=tuple(scene.warnings),
+                       drags=tuple(drags))
 
 
 def _joint(name: str, joint, world) -> SystemJoint:
