@@ -59,6 +59,57 @@ def test_heavy_top_on_a_spherical_joint_equals_lagrange_closed_form():
     assert np.allclose(s.rates[0], s.angular_velocity[:, 0], atol=1e-12)
 
 
+def test_spherical_rates_in_the_joint_frame_either_way_round():
+    """A spherical joint's rates are the second body's angular velocity relative to the first,
+    in the joint frame the first carries (the contract), whichever way the tree runs it, from a
+    named start pose on: the top declared [world, top] and [top, world] moves alike, and its
+    reported rates are E_aᵀ (ω_b − ω_a) with E_a = R_a R_a0ᵀ (the world's: E = I)."""
+    turn = np.array([0.9, 0.3, -0.2, 0.25])
+    turn /= np.linalg.norm(turn)
+    w = np.array([0.4, -1.5, 6.0])  # world, at t = 0
+    top = ("bodies:\n  top: {mesh: ../sample_meshes/prism.obj, density: 1.0, "
+           "position: [0, 0, 1.2]}\n")
+    tail = "forces: [{type: gravity, g: [0, 0, -9.81]}]\ntime: {duration: 0.5}\n"
+    start = quat_to_matrix(turn)
+    ahead = _system(top + "joints:\n  - {name: tip, type: spherical, bodies: [world, top], "
+                    f"point: [0, 0, 0]}}\ninitial: {{positions: {{tip: {_vec(turn)}}}, "
+                    f"rates: {{tip: {_vec(w)}}}}}\n" + tail, every=0.1).samples
+    # reversed: the world turns by turnᵀ relative to the top, at −(Rᵀ w) in the top's frame
+    back = _system(top + "joints:\n  - {name: tip, type: spherical, bodies: [top, world], "
+                   f"point: [0, 0, 0]}}\ninitial: {{positions: {{tip: "
+                   f"{_vec(turn * [1, -1, -1, -1])}}}, rates: {{tip: {_vec(-start.T @ w)}}}}}\n"
+                   + tail, every=0.1).samples
+    assert np.allclose(ahead.angular_velocity[0, 0], w, atol=1e-14)
+    assert np.allclose(back.angular_velocity[0, 0], w, atol=1e-14)
+    assert np.max(rotation_angle_between(ahead.orientation[:, 0], back.orientation[:, 0])) < 1e-9
+    assert np.max(np.abs(ahead.angular_velocity - back.angular_velocity)) < 1e-8
+    assert np.allclose(ahead.rates[0], ahead.angular_velocity[:, 0], atol=1e-12)
+    carried = np.array([quat_to_matrix(q) for q in back.orientation[:, 0]])  # R_a0 = I
+    want = -np.einsum("nji,nj->ni", carried, back.angular_velocity[:, 0])
+    assert np.allclose(back.rates[0], want, atol=1e-12)
+    assert np.allclose(back.coordinates[0][0], turn * [1, -1, -1, -1], atol=1e-15)
+
+
+def test_tumbling_near_the_unstable_axis_keeps_its_phase():
+    """separatrix.yaml's body spun 1e-3 off its intermediate axis, as a floating system: the
+    ball's and the free joint's rates turn with the body (`tree`), so orientation errors do not
+    feed its angular velocity; with world-side rates the same run at rtol 1e-9 was 1.7e-2 rad
+    off the closed form at 10 s, now ~1e-8."""
+    scene, ref = _one_body("separatrix.yaml", 10.0, 1.0)
+    w = scene.initial.angular_velocity
+    if scene.initial.angular_velocity_frame == "body":
+        w = quat_to_matrix(scene.initial.orientation) @ w
+    body = scene.body
+    inertia = "[" + ", ".join(_vec(row) for row in body.inertia_body) + "]"
+    text = (f"bodies:\n  b: {{mass: {body.mass!r}, inertia: {inertia}, position: [0, 0, 0], "
+            f"orientation: {_vec(scene.initial.orientation)}}}\n"
+            f"initial: {{bodies: {{b: {{angular_velocity: {_vec(w)}}}}}}}\n"
+            "time: {duration: 10.0}\n")
+    s = _system(text,
+                every=1.0, rtol=1e-9).samples
+    assert np.max(rotation_angle_between(s.orientation[:, 0], ref.trajectory.orientation)) < 1e-7
+
+
 def test_floating_body_equals_torque_free_closed_form():
     scene, ref = _one_body("dzhanibekov.yaml", 2.0, 0.25)
     w = np.array([-3.2, 9.0, 2.8])

@@ -92,18 +92,18 @@ def _rhs(pp, wp, t, y, out, rank0, posed):
 
 @inlined
 def _quat_rate(q, o, w, iw, out):
-    """out[o:o + 4] = ½ (0, w) ⊗ q[o:o + 4], w = w[iw:iw + 3]."""
+    """out[o:o + 4] = ½ q[o:o + 4] ⊗ (0, w), w = w[iw:iw + 3] (on the moving side, `tree`)."""
     q0, q1, q2, q3 = q[o], q[o + 1], q[o + 2], q[o + 3]
     w0, w1, w2 = w[iw], w[iw + 1], w[iw + 2]
     out[o] = 0.5 * -(w0 * q1 + w1 * q2 + w2 * q3)
-    out[o + 1] = 0.5 * (q0 * w0 + w1 * q3 - w2 * q2)
-    out[o + 2] = 0.5 * (q0 * w1 + w2 * q1 - w0 * q3)
-    out[o + 3] = 0.5 * (q0 * w2 + w0 * q2 - w1 * q1)
+    out[o + 1] = 0.5 * (q0 * w0 + q2 * w2 - q3 * w1)
+    out[o + 2] = 0.5 * (q0 * w1 + q3 * w0 - q1 * w2)
+    out[o + 3] = 0.5 * (q0 * w2 + q1 * w1 - q2 * w0)
 
 
 @inlined
 def _quat_turn(q, o, rv, ir):
-    """q[o:o + 4] = exp(rv) ⊗ q[o:o + 4], normalised (rv = rv[ir:ir + 3], world side)."""
+    """q[o:o + 4] = q[o:o + 4] ⊗ exp(rv), normalised (rv = rv[ir:ir + 3], moving side)."""
     angle = math.sqrt(rv[ir] ** 2 + rv[ir + 1] ** 2 + rv[ir + 2] ** 2)
     if angle == 0.0:
         return
@@ -111,10 +111,10 @@ def _quat_turn(q, o, rv, ir):
     sh = math.sin(h) / angle
     p0, p1, p2, p3 = math.cos(h), sh * rv[ir], sh * rv[ir + 1], sh * rv[ir + 2]
     q0, q1, q2, q3 = q[o], q[o + 1], q[o + 2], q[o + 3]
-    w = p0 * q0 - (p1 * q1 + p2 * q2 + p3 * q3)
-    x = p0 * q1 + q0 * p1 + (p2 * q3 - p3 * q2)
-    y = p0 * q2 + q0 * p2 + (p3 * q1 - p1 * q3)
-    z = p0 * q3 + q0 * p3 + (p1 * q2 - p2 * q1)
+    w = q0 * p0 - (q1 * p1 + q2 * p2 + q3 * p3)
+    x = q0 * p1 + p0 * q1 + (q2 * p3 - q3 * p2)
+    y = q0 * p2 + p0 * q2 + (q3 * p1 - q1 * p3)
+    z = q0 * p3 + p0 * q3 + (q1 * p2 - q2 * p1)
     n = math.sqrt(w * w + x * x + y * y + z * z)
     q[o], q[o + 1], q[o + 2], q[o + 3] = w / n, x / n, y / n, z / n
 
@@ -133,7 +133,8 @@ def normalize(pp, q):
 
 @array_inner
 def _advance(pp, q, delta):
-    """q moved by the tangent delta: coordinates add, quaternions turn by exp(δ)."""
+    """q moved by the tangent delta: coordinates add, quaternions turn by exp(δ) on their
+    moving side (`tree.advance`)."""
     ji = at(pp, 1)
     for k in range(ji.shape[0]):
         kind, iq, iu, nqj = ji[k, 0], ji[k, 3], ji[k, 4], ji[k, 5]

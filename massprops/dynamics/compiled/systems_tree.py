@@ -154,10 +154,10 @@ def poses(pp, q, wp):
             for c in range(6):
                 for i in range(6):
                     s[i, iu + c] = 0.0
-            for i in range(3):
+            for i in range(3):  # ω = Q u: rates that turn with the body (`tree`)
                 s[3 + i, iu + i] = 1.0
                 for j in range(3):
-                    w[j] = 1.0 if i == j else 0.0
+                    w[j] = qm[j, i]
                 _column(s, iu + 3 + i, w, px, py, pz, True)
         else:
             pr = rot[par if par >= 0 else 0]  # the parent's R (unread for the world's children)
@@ -170,7 +170,7 @@ def poses(pp, q, wp):
                     + pr[2, 2] * jsp[k, 2]
             else:
                 px, py, pz = jsp[k, 0], jsp[k, 1], jsp[k, 2]
-            if kind == SPHERICAL:  # through the joint frame, whose axes are S's columns
+            if kind == SPHERICAL:  # through the joint frame; S's columns turn with the child
                 jr = jrp0[k]
                 if par >= 0:
                     mm3(pr, jr, carry, True)
@@ -183,7 +183,7 @@ def poses(pp, q, wp):
                 mm3(rp, brot0[ch], rot[ch], False)
                 for c in range(3):
                     for i in range(3):
-                        w[i] = carry[i, c]
+                        w[i] = rp[i, c]
                     _column(s, iu + c, w, px, py, pz, True)
             else:  # in the parent's frame (program entries 25 and 26)
                 a0, a1, kc = jaxp[k, 0], jaxp[k, 1], jrc0[k]
@@ -251,11 +251,11 @@ def motion(pp, u, wp):
             m3_ += s[3, iu + c] * x
             m4 += s[4, iu + c] * x
             m5 += s[5, iu + c] * x
-        if kind == FREE:  # the world's child: its bias v_c × ω (u = [v_c, ω])
+        if kind == FREE:  # the world's child: its bias v_c × ω (u = [v_c, ·], ω = S u's)
             b0 = b1 = b2 = 0.0
-            b3 = u[iu + 1] * u[iu + 5] - u[iu + 2] * u[iu + 4]
-            b4 = u[iu + 2] * u[iu + 3] - u[iu] * u[iu + 5]
-            b5 = u[iu] * u[iu + 4] - u[iu + 1] * u[iu + 3]
+            b3 = u[iu + 1] * m2 - u[iu + 2] * m1
+            b4 = u[iu + 2] * m0 - u[iu] * m2
+            b5 = u[iu] * m1 - u[iu + 1] * m0
         else:  # the bias V_parent ×m S u
             b0 = v1 * m2 - v2 * m1
             b1 = v2 * m0 - v0 * m2

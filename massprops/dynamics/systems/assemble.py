@@ -23,7 +23,7 @@ import numpy as np
 
 from massprops.dynamics.systems.loops import Coupling, Primitive, primitives
 from massprops.dynamics.systems.model import ONE_AXIS, WORLD, SystemScene
-from massprops.dynamics.systems.tree import NQ, NV, TreeJoint
+from massprops.dynamics.systems.tree import NQ, NV, TreeJoint, joint_rates, quat_matrix
 from massprops.errors import SceneError
 
 
@@ -257,6 +257,7 @@ def initial_coordinates(scene: SystemScene, tree: Tree) -> tuple[np.ndarray, np.
     for j in tree.joints:
         if j.kind in ("spherical", "free"):
             q[j.iq + (3 if j.kind == "free" else 0)] = 1.0
+    rates: dict[int, np.ndarray] = {}
     for key, values in (("positions", scene.initial.positions), ("rates", scene.initial.rates)):
         for name, value in values.items():
             k = next(i for i, j in enumerate(scene.joints) if j.name == name)
@@ -271,8 +272,7 @@ def initial_coordinates(scene: SystemScene, tree: Tree) -> tuple[np.ndarray, np.
                 if value.size != j.nv:
                     raise SceneError(f"{where}expected {j.nv} rate(s) for a {j.kind} joint, "
                                      f"got {value.size}")
-                u[j.iu:j.iu + j.nv] = _tree_order(j, value)
-                fixed_u.update(range(j.iu, j.iu + j.nv))
+                rates[k] = value  # set once every named position is known
                 continue
             if j.kind == "spherical":
                 if value.size != 4 or not np.linalg.norm(value) > 0:
@@ -286,12 +286,20 @@ def initial_coordinates(scene: SystemScene, tree: Tree) -> tuple[np.ndarray, np.
                                      f"got {value.size}")
                 q[j.iq:j.iq + j.nq] = _tree_order(j, value)
             fixed_q.update(range(j.iu, j.iu + j.nv))
+    for k, value in rates.items():
+        j = tree.joints[tree.of_scene[k][1]]
+        if j.kind == "spherical":  # the scene's joint frame -> the tree's moving one
+            u[j.iu:j.iu + 3] = joint_rates(j, q[j.iq:j.iq + 4], np.eye(3)).T @ value  # a turn
+        else:
+            u[j.iu:j.iu + j.nv] = _tree_order(j, value)
+        fixed_u.update(range(j.iu, j.iu + j.nv))
     for name, (v, w) in scene.initial.velocities.items():
         i = next(i for i, b in enumerate(tree.bodies) if b.name == name)
         j = tree.joints[tree.parent_joint[i]]
         if j.kind != "free":
             raise SceneError(f"{scene.where('initial.bodies.' + name)}body {name!r} is held by "
                              "a joint: give its joints' rates in initial.rates instead")
-        u[j.iu:j.iu + 3], u[j.iu + 3:j.iu + 6] = v, w
+        u[j.iu:j.iu + 3] = v
+        u[j.iu + 3:j.iu + 6] = quat_matrix(q[j.iq + 3:j.iq + 7]).T @ w  # ω = Q u
         fixed_u.update(range(j.iu, j.iu + 6))
     return q, u, fixed_q, fixed_u

@@ -74,10 +74,10 @@ def holding(system, t: float, y: np.ndarray) -> list[np.ndarray]:
             continue
         j = tree.joints[n]
         f = motor[j.iu:j.iu + j.nv]
-        if j.reversed:  # the scene's coordinates are the tree's turned around (assemble.py)
-            if j.kind == "spherical":
-                f = -tr.quat_matrix(q[j.iq:j.iq + 4]).T @ f
-            elif j.kind == "universal":
+        if j.kind == "spherical":  # a torque in the tree's moving frame, as its rates
+            f = tr.joint_rates(j, q[j.iq:j.iq + 4], f)
+        elif j.reversed:  # the scene's coordinates are the tree's turned around (assemble.py)
+            if j.kind == "universal":
                 f = -f[::-1]
             else:
                 f = -f

@@ -178,11 +178,11 @@ def _joint_state(system, k: int, y: np.ndarray, kin):
     if where == "tree":
         j = tree.joints[n]
         qj, uj = q[j.iq:j.iq + j.nq], u[j.iu:j.iu + j.nv]
+        if j.kind == "spherical":
+            return (qj * np.array([1, -1, -1, -1]) if j.reversed else qj,
+                    tr.joint_rates(j, qj, uj))
         if not j.reversed:
             return qj, uj
-        if j.kind == "spherical":
-            rel = tr.quat_matrix(qj)
-            return qj * np.array([1, -1, -1, -1]), -rel.T @ uj
         if j.kind == "universal":
             return -qj[::-1], -uj[::-1]
         return -qj, -uj
