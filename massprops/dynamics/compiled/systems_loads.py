@@ -19,6 +19,7 @@ def applied(pp, t, q, u, wp):
     ji, bweight = at(pp, 1), at(pp, 11)
     fi, ff, si, sf, li, lf = at(pp, 14), at(pp, 15), at(pp, 16), at(pp, 17), at(pp, 18), at(pp, 19)
     rot, com, vel, fext, tau = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 11), at(wp, 12)
+    ref = at(wp, 43)
     v3 = at(wp, 9)
     vec, x, xa, xb = v3[0], v3[1], v3[2], v3[3]
     va, vb, dd, force = v3[4], v3[5], v3[6], v3[7]
@@ -51,8 +52,8 @@ def applied(pp, t, q, u, wp):
             fext[b, i] += xa[i]
             fext[b, 3 + i] += vec[i]
     for n in range(si.shape[0]):
-        _point_state(rot, com, vel, si[n, 0], sf[n, 0:3], xa, va)
-        _point_state(rot, com, vel, si[n, 1], sf[n, 3:6], xb, vb)
+        _point_state(rot, com, vel, ref, si[n, 0], sf[n, 0:3], xa, va)
+        _point_state(rot, com, vel, ref, si[n, 1], sf[n, 3:6], xb, vb)
         for i in range(3):
             x[i] = xb[i] - xa[i]
             dd[i] = vb[i] - va[i]
@@ -87,19 +88,19 @@ def applied(pp, t, q, u, wp):
         if lf[n, 4] <= t < lf[n, 5]:
             load += lf[n, 3]
         tau[ji[k, 4]] += sign * load
-    _cut_loads(at(pp, 21), at(pp, 22), t, rot, com, vel, fext, v3)
+    _cut_loads(at(pp, 21), at(pp, 22), t, rot, com, vel, ref, fext, v3)
 
 
 @array_inner
-def _cut_loads(ci, cf, t, rot, com, vel, fext, v3):
+def _cut_loads(ci, cf, t, rot, com, vel, ref, fext, v3):
     """The loaded cut joints' wrench pairs into fext (`systems.cutjoint`; ci, cf: program
     entries 21 and 22)."""
     e, sa, sb, xa, xb, va, vb, x = v3[8], v3[9], v3[10], v3[11], v3[12], v3[13], v3[14], v3[15]
     for n in range(ci.shape[0]):
         a, b = ci[n, 1], ci[n, 2]
         _turned(rot, a, cf[n, 0:3], e)
-        _point_state(rot, com, vel, a, cf[n, 9:12], xa, va)
-        _point_state(rot, com, vel, b, cf[n, 12:15], xb, vb)
+        _point_state(rot, com, vel, ref, a, cf[n, 9:12], xa, va)
+        _point_state(rot, com, vel, ref, b, cf[n, 12:15], xb, vb)
         rate = 0.0
         for i in range(3):
             rate += ((vel[b, i] if b >= 0 else 0.0) - (vel[a, i] if a >= 0 else 0.0)) * e[i]
@@ -168,11 +169,12 @@ def _turned(rot, body, local, out):
 
 
 @inlined
-def _point_state(rot, com, vel, body, local, x, v):
-    """World position and velocity of a body point (the world's points are world already)."""
+def _point_state(rot, com, vel, ref, body, local, x, v):
+    """World position (from the reference point ``ref``, as ``com``) and velocity of a body
+    point (the world's points are world already)."""
     if body < 0:
         for i in range(3):
-            x[i], v[i] = local[i], 0.0
+            x[i], v[i] = local[i] - ref[i], 0.0
         return
     for i in range(3):
         x[i] = com[body, i] + rot[body, i, 0] * local[0] + rot[body, i, 1] * local[1] \

@@ -31,11 +31,13 @@ OK, LINALG, SINGULAR = 0, 6, 3
 
 
 @inlined
-def _point_motion(rot, com, vel, acc, body, local):
-    """World position, velocity and acceleration (kinematics' A) of a body point: nine floats
-    (x, v, a), in scalars rather than scratch arrays (see `systems_tree.poses`)."""
+def _point_motion(rot, com, vel, acc, ref, body, local):
+    """World position (from the reference point ``ref``, as ``com``), velocity and
+    acceleration (kinematics' A) of a body point: nine floats (x, v, a), in scalars rather
+    than scratch arrays (see `systems_tree.poses`)."""
     if body < 0:
-        return local[0], local[1], local[2], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return local[0] - ref[0], local[1] - ref[1], local[2] - ref[2], 0.0, 0.0, 0.0, 0.0, \
+            0.0, 0.0
     r = rot[body]
     x0 = com[body, 0] + r[0, 0] * local[0] + r[0, 1] * local[1] + r[0, 2] * local[2]
     x1 = com[body, 1] + r[1, 0] * local[0] + r[1, 1] * local[1] + r[1, 2] * local[2]
@@ -89,7 +91,7 @@ def terms(pp, wp):
     `systems_tree.kinematics` keeps in ws[34])."""
     pi, pf, size, pjoint, ji = at(pp, 12), at(pp, 13), at(pp, 20)[0], at(pp, 6), at(pp, 1)
     phi, gdot, rb, ra, g, s = at(wp, 19), at(wp, 20), at(wp, 21), at(wp, 22), at(wp, 23), at(wp, 5)
-    rot, com, vel, acc = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3)
+    rot, com, vel, acc, ref = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3), at(wp, 43)
     v = at(wp, 9)
     xa, xb, t, e = v[0], v[3], v[6], v[7]
     d, dd, ddd, w1, w2, w3, w4, w5 = v[8], v[9], v[10], v[11], v[12], v[13], v[14], v[15]
@@ -121,10 +123,10 @@ def terms(pp, wp):
             gdot[row] = size * ((wb0 - wa0) * f0 + (wb1 - wa1) * f1 + (wb2 - wa2) * f2
                                 + (ab0 - aa0) * n0 + (ab1 - aa1) * n1 + (ab2 - aa2) * n2)
         else:
-            xa0, xa1, xa2, va0, va1, va2, aa0, aa1, aa2 = _point_motion(rot, com, vel, acc, a,
-                                                                        pf[n, 0:3])
-            xb0, xb1, xb2, vb0, vb1, vb2, ab0, ab1, ab2 = _point_motion(rot, com, vel, acc, b,
-                                                                        pf[n, 3:6])
+            xa0, xa1, xa2, va0, va1, va2, aa0, aa1, aa2 = _point_motion(rot, com, vel, acc,
+                                                                        ref, a, pf[n, 0:3])
+            xb0, xb1, xb2, vb0, vb1, vb2, ab0, ab1, ab2 = _point_motion(rot, com, vel, acc,
+                                                                        ref, b, pf[n, 3:6])
             if kind == 0:  # point: its rows of G in one walk a side (`_point_rows`)
                 phi[row], phi[row + 1], phi[row + 2] = xb0 - xa0, xb1 - xa1, xb2 - xa2
                 gdot[row], gdot[row + 1], gdot[row + 2] = ab0 - aa0, ab1 - aa1, ab2 - aa2

@@ -51,7 +51,7 @@ def workspace(prog):
             np.zeros((m, kk)), np.zeros((nv, kk)), np.zeros(nv), np.zeros(nqc),  # 31-34
             np.zeros(nv), np.zeros(m), np.zeros(max(nq, nv)), np.zeros(nq + nv),  # 35-38
             np.zeros(1 + p, dtype=np.int64), np.zeros(p), np.zeros((n, INERTIA_SIZE)),  # 39-41
-            np.zeros((kk, kk)))  # 42
+            np.zeros((kk, kk)), np.zeros(3))  # 42-43
 
 
 @array_jit

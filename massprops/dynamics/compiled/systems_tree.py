@@ -138,6 +138,12 @@ def poses(pp, q, wp):
     bmass, binertia, brot0, bcom0 = at(pp, 7), at(pp, 8), at(pp, 9), at(pp, 10)
     jaxp, jrc0 = at(pp, 25), at(pp, 26)
     rot, com, inert, s, pts = at(wp, 0), at(wp, 1), at(wp, 4), at(wp, 5), at(wp, 6)
+    ref = at(wp, 43)  # the point positions are measured from (`tree.reference_point`)
+    ref[0] = ref[1] = ref[2] = 0.0
+    for k in range(ji.shape[0]):
+        if ji[k, 0] == FREE:
+            ref[0], ref[1], ref[2] = q[ji[k, 3]], q[ji[k, 3] + 1], q[ji[k, 3] + 2]
+            break
     m3, v3 = at(wp, 8), at(wp, 9)
     carry, qm, tmp, rp = m3[0], m3[1], m3[2], m3[3]
     d, w = v3[0], v3[2]
@@ -149,7 +155,9 @@ def poses(pp, q, wp):
         if kind == FREE:  # the world's child
             quat_into(qm, q, iq + 3)
             mm3(qm, brot0[ch], rot[ch], False)
-            px, py, pz = bcom0[ch, 0] + q[iq], bcom0[ch, 1] + q[iq + 1], bcom0[ch, 2] + q[iq + 2]
+            px = bcom0[ch, 0] + (q[iq] - ref[0])
+            py = bcom0[ch, 1] + (q[iq + 1] - ref[1])
+            pz = bcom0[ch, 2] + (q[iq + 2] - ref[2])
             com[ch, 0], com[ch, 1], com[ch, 2] = px, py, pz
             for c in range(6):
                 for i in range(6):
@@ -168,8 +176,8 @@ def poses(pp, q, wp):
                     + pr[1, 2] * jsp[k, 2]
                 pz = com[par, 2] + pr[2, 0] * jsp[k, 0] + pr[2, 1] * jsp[k, 1] \
                     + pr[2, 2] * jsp[k, 2]
-            else:
-                px, py, pz = jsp[k, 0], jsp[k, 1], jsp[k, 2]
+            else:  # a world point, seen from the reference point
+                px, py, pz = jsp[k, 0] - ref[0], jsp[k, 1] - ref[1], jsp[k, 2] - ref[2]
             if kind == SPHERICAL:  # through the joint frame; S's columns turn with the child
                 jr = jrp0[k]
                 if par >= 0:

@@ -29,9 +29,10 @@ from massprops.rotation import matrix_to_quat
 
 
 def world_point(tree, kin, body: int, world0: np.ndarray) -> np.ndarray:
-    """The point of ``body`` that was at ``world0`` (world, t = 0), now, world (m)."""
+    """The point of ``body`` that was at ``world0`` (world, t = 0), now, world (m, from the
+    kinematics' reference point, as its positions)."""
     if body == WORLD:
-        return np.asarray(world0, float)
+        return np.asarray(world0, float) - kin.ref
     b = tree.bodies[body]
     return kin.com[body] + kin.rotation[body] @ (b.rotation0.T @ (world0 - b.com0))
 

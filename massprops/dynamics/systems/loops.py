@@ -121,7 +121,7 @@ def _point(kin, body: int, local: np.ndarray):
     """World position, velocity and acceleration (at the kinematics' A) of a body point."""
     r, w, vo, dw, dvo = _motion(kin, body)
     if body == WORLD:
-        return local, np.zeros(3), np.zeros(3)
+        return local - kin.ref, np.zeros(3), np.zeros(3)
     x = kin.com[body] + r @ local
     v = vo + cross(w, x)
     return x, v, dvo + cross(dw, x) + cross(w, v)

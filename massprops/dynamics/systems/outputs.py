@@ -51,7 +51,7 @@ def body_states(system, y: np.ndarray):
     vel, omega = np.empty((n, nb, 3)), np.empty((n, nb, 3))
     for s in range(n):
         kin = tr.kinematics(tree, y[s, :system.nq], y[s, system.nq:])
-        pos[s], vel[s] = kin.com, kin.V[:, 3:] + np.cross(kin.V[:, :3], kin.com)
+        pos[s], vel[s] = kin.com + kin.ref, kin.V[:, 3:] + np.cross(kin.V[:, :3], kin.com)
         omega[s] = kin.V[:, :3]
         quat[s] = canonical(matrix_to_quat(kin.rotation))
     return pos + system.origin, quat, vel, omega
@@ -72,14 +72,15 @@ def evaluate(system, t: np.ndarray, y: np.ndarray,
     for s in range(n):
         sol = system.solve(float(t[s]), y[s], check=False)
         kin = sol.kin
-        pos[s], vel[s] = kin.com, kin.V[:, 3:] + np.cross(kin.V[:, :3], kin.com)
+        pos[s], vel[s] = kin.com + kin.ref, kin.V[:, 3:] + np.cross(kin.V[:, :3], kin.com)
         omega[s] = kin.V[:, :3]
         quat[s] = canonical(matrix_to_quat(kin.rotation))
         _reactions(system, float(t[s]), y[s], sol, force[s], torque[s])
         for k in range(nj):
             c, r = _joint_state(system, k, y[s], kin)
             coords[k][s], rates[k][s] = c, r
-            points[s, k] = _world_point(tree, kin, scene.joints[k].b, _joint_point(scene, k))
+            points[s, k] = _world_point(tree, kin, scene.joints[k].b,
+                                        _joint_point(scene, k)) + kin.ref
     for k, j in enumerate(scene.joints):  # angles of joints measured from poses: continuous
         if tree.of_scene[k][0] == "cut" and j.kind in ("revolute", "cylindrical", "universal"):
             turns = [0] if j.kind != "universal" else [0, 1]

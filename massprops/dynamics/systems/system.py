@@ -234,7 +234,7 @@ class System:
         q, u = y[:self.nq], y[self.nq:]
         kin = tr.kinematics(self.tree, q, u)
         e = sum(0.5 * kin.V[i] @ kin.inertia[i] @ kin.V[i] for i in range(len(kin.com)))
-        e -= float(np.sum(self.weights * kin.com))
+        e -= float(np.sum(self.weights * (kin.com + kin.ref)))
         for s, (la, lb) in zip(self.scene.springs, self.spring_local):
             xa, _ = _point_state(kin, s.a, la)
             xb, _ = _point_state(kin, s.b, lb)
@@ -270,7 +270,7 @@ def _local(bodies, body: int, point: np.ndarray) -> np.ndarray:
 
 def _point_state(kin: tr.Kinematics, body: int, local: np.ndarray):
     if body == WORLD:
-        return local, np.zeros(3)
+        return local - kin.ref, np.zeros(3)
     x = kin.com[body] + kin.rotation[body] @ local
     return x, kin.V[body, 3:] + cross(kin.V[body, :3], x)
 

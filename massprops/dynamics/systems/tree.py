@@ -143,7 +143,8 @@ class Kinematics:
     """Per body: rotation (n, 3, 3) body -> world, com (n, 3), V (n, 6), A (n, 6) (with the
     accelerations given, else u̇ = 0), inertia (n, 6, 6) about O, bias (n, 6) the velocity
     product term of its joint (A = A_parent + bias + S u̇); per tree joint: S (6, nv) and the
-    joint point p (3,) world."""
+    joint point p (3,) world. O, the point positions are measured from, is ``ref`` (3,) of
+    the system's frame (`reference_point`): a world point w is at w − ref."""
 
     rotation: np.ndarray
     com: np.ndarray
@@ -153,6 +154,7 @@ class Kinematics:
     S: list
     point: list
     bias: np.ndarray | None = None
+    ref: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
 
 
 def _joint_motion(j: TreeJoint, qj: np.ndarray, carry: np.ndarray):
@@ -175,9 +177,23 @@ def _joint_motion(j: TreeJoint, qj: np.ndarray, carry: np.ndarray):
     return np.eye(3), np.zeros(3), []  # fixed
 
 
+def reference_point(tree, q: np.ndarray) -> np.ndarray:
+    """(3,) m: the point this state's spatial vectors are about, in the system's frame: the
+    first floating base's displacement x (its centre of mass then sits at its start c0), else
+    the frame's origin. Each evaluation is about a point fixed in the world at that instant,
+    so the equations hold as about any; a floating system pushed far by its forces keeps its
+    inertias and velocities about a point among its bodies, not (d / size)² × eps off."""
+    for j in tree.joints:
+        if j.kind == "free":
+            return np.array(q[j.iq:j.iq + 3], dtype=float)
+    return np.zeros(3)
+
+
 def kinematics(tree, q: np.ndarray, u: np.ndarray, udot: np.ndarray | None = None) -> Kinematics:
-    """Poses, spatial velocities and accelerations of every body (one pass, tree order)."""
+    """Poses, spatial velocities and accelerations of every body (one pass, tree order), about
+    `reference_point`."""
     n = len(tree.bodies)
+    ref = reference_point(tree, q)
     rotation, com = np.empty((n, 3, 3)), np.empty((n, 3))
     V, A, inertia = np.zeros((n, 6)), np.zeros((n, 6)), np.empty((n, 6, 6))
     biases = np.zeros((n, 6))
@@ -185,14 +201,14 @@ def kinematics(tree, q: np.ndarray, u: np.ndarray, udot: np.ndarray | None = Non
     for j in tree.joints:
         body = tree.bodies[j.child]
         qj, uj = q[j.iq:j.iq + j.nq], u[j.iu:j.iu + j.nv]
-        if j.parent == WORLD:
-            rp, cp, vp, ap = EYE3, np.zeros(3), np.zeros(6), np.zeros(6)
+        if j.parent == WORLD:  # the world's origin, seen from the reference point
+            rp, cp, vp, ap = EYE3, -ref, np.zeros(6), np.zeros(6)
         else:
             rp, cp, vp, ap = rotation[j.parent], com[j.parent], V[j.parent], A[j.parent]
         if j.kind == "free":
             qm = quat_matrix(qj[3:7])
             r = qm @ body.rotation0
-            c = body.com0 + qj[0:3]
+            c = body.com0 + (qj[0:3] - ref)
             s = np.zeros((6, 6))
             s[3:, 0:3] = EYE3
             s[0:3, 3:6] = qm  # ω = Q u[3:6]: rates that turn with the body
@@ -221,7 +237,7 @@ def kinematics(tree, q: np.ndarray, u: np.ndarray, udot: np.ndarray | None = Non
         biases[j.child] = bias
         S.append(s)
         points.append(p)
-    return Kinematics(rotation, com, V, A, inertia, S, points, biases)
+    return Kinematics(rotation, com, V, A, inertia, S, points, biases, ref)
 
 
 def with_accelerations(tree, kin: Kinematics, udot: np.ndarray) -> Kinematics:
