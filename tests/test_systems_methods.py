@@ -388,3 +388,65 @@ def test_a_first_step_far_beyond_stability_is_rejected_not_fatal():
     assert error <= max(10 * run.diagnostics["error_estimate"], 1e-12)
     swing = np.abs(tight.samples.coordinates[0][:, 0]).max()
     assert swing > 0  # the hinge is loaded: the pair really moves
+
+
+@pytest.mark.parametrize("method", ["rk4", "implicit"])
+def test_a_fixed_step_run_cut_into_calls_is_the_same_run(four_bar, monkeypatch, method):
+    four_bar = four_bar[0]
+    """Compiled calls end every CALL_STEPS steps (Ctrl-C and the progress bar are served
+    between them); a fixed-step run resumes on its own grid, so cut into calls of 7 steps it
+    is the uncut run to round-off (a resumed call evaluates f at its start afresh, where the
+    uncut one reused the projection's factors), and the progress it reports rises to 1."""
+    from massprops.dynamics.systems import integrate
+
+    whole = simulate_system(four_bar, integrator=method, step=0.01, estimate=False)
+    monkeypatch.setattr(integrate, "CALL_STEPS", 7)
+    seen: list[float] = []
+    cut = simulate_system(four_bar, integrator=method, step=0.01, estimate=False,
+                          progress=seen.append)
+    assert cut.steps == whole.steps and len(seen) > whole.steps // 7 - 2
+    assert np.allclose(cut.samples.coordinates[0], whole.samples.coordinates[0], rtol=0,
+                       atol=1e-13)
+    scale = np.abs(whole.samples.force).max()
+    assert np.abs(cut.samples.force - whole.samples.force).max() < 1e-12 * scale
+    assert seen == sorted(seen) and seen[-1] == 1.0
+
+
+def test_dop853_cut_into_calls_stays_within_its_estimate(pendulum, monkeypatch):
+    pendulum = pendulum[0]
+    """DOP853 resumed after each call starts with a fresh first step: another step sequence,
+    the same solution within the error estimate."""
+    from massprops.dynamics.systems import integrate
+
+    whole = simulate_system(pendulum, rtol=1e-8)
+    monkeypatch.setattr(integrate, "CALL_STEPS", 5)
+    cut = simulate_system(pendulum, rtol=1e-8, estimate=False)
+    size = pendulum.size
+    assert distance(cut.samples, whole.samples, size) < 2 * whole.diagnostics["error_estimate"]
+    assert cut.steps > whole.steps  # each call's first step is small again
+
+
+def test_ctrl_c_keeps_what_was_computed(four_bar, monkeypatch):
+    four_bar = four_bar[0]
+    """Ctrl-C between compiled calls ends the run with its samples up to where it got: the
+    result says interrupted, has no error estimate, and its last sample is the state reached
+    (on the motion: the same as the uncut run there, to its error)."""
+    from massprops.dynamics.systems import integrate
+
+    monkeypatch.setattr(integrate, "CALL_STEPS", 10)
+    calls = []
+
+    def progress(fraction: float) -> None:
+        calls.append(fraction)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+
+    part = simulate_system(four_bar, rtol=1e-9, every=0.01, progress=progress)
+    assert part.interrupted and part.as_dict()["interrupted"] is True
+    assert part.diagnostics["error_estimate"] is None
+    reached = part.samples.t[-1]
+    assert 0 < reached < four_bar.time.duration and np.all(np.diff(part.samples.t) > 0)
+    assert np.isfinite(part.samples.position).all()
+    whole = simulate_system(four_bar, rtol=1e-9, every=0.01, estimate=False)
+    at = np.searchsorted(whole.samples.t, part.samples.t[-2])
+    assert np.abs(part.samples.coordinates[0][-2] - whole.samples.coordinates[0][at]).max() < 1e-6

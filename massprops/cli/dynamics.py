@@ -107,8 +107,9 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             require_matplotlib()
         if _is_system(scene_path):  # `bodies:`, `model:` or a description: the systems package
             whole_process()  # numba started lean: this process runs massprops alone
-            _simulate_system(scene_path, as_json, output_path, integrator, rtol, step, every,
-                             force, plot_path, duration, max_steps)
+            if _simulate_system(scene_path, as_json, output_path, integrator, rtol, step, every,
+                                force, plot_path, duration, max_steps, quiet):
+                interrupted.append(True)
             return
         # deferred: the one-body run's modules, not a system's
         from massprops.dynamics.scene import load_scene
@@ -249,9 +250,10 @@ def _is_system(scene_path: str) -> bool:
 def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
                      integrator: str | None, rtol: float | None, step: float | None,
                      every: float | None, force: bool, plot_path: str | None = None,
-                     duration: float | None = None, max_steps: int | None = None) -> None:
+                     duration: float | None = None, max_steps: int | None = None,
+                     quiet: bool = False) -> bool:
     """A system scene or a robot description: run, write the trajectory, print JSON or a short
-    summary."""
+    summary; True when Ctrl-C stopped the run (what it computed is written and printed)."""
     # deferred, as the one-body path's imports: only a system scene needs them
     from massprops.dynamics.systems.robot_scene import load_any_system
     from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
@@ -263,8 +265,13 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     sampling = every or scene.output.every
     if sampling is None and (out or plot_path):
         sampling = scene.time.duration / 1000
-    result = simulate_system(scene, integrator=integrator, rtol=rtol, step=step, every=sampling,
-                             notice=say_note, max_steps=max_steps)
+    progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+    try:
+        result = simulate_system(scene, integrator=integrator, rtol=rtol, step=step,
+                                 every=sampling, notice=say_note, max_steps=max_steps,
+                                 progress=progress)
+    finally:
+        progress.close()
     say_notes(result.notes)
     if out:
         write_system_trajectory(result, out, force=force,
@@ -276,7 +283,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     data = result.as_dict()
     if as_json:
         emit_json(data)
-        return
+        return result.interrupted
     diag = data["diagnostics"]
     click.echo(f"{scene_path}: {len(scene.bodies)} bodies, {len(scene.joints)} joints, "
                f"{diag['degrees_of_freedom']} degrees of freedom; t = {data['final']['t']:g} s "
@@ -285,6 +292,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
         held = f", holding {joint['holding']}" if "holding" in joint else ""
         click.echo(f"  {name} ({joint['type']}): q = {joint['coordinates']}, "
                    f"force {joint['force']} N, torque {joint['torque']} N·m{held}")
+    return result.interrupted
 
 
 def _emit_precision(report: Any, scene_path: str, plot_path: str | None, as_json: bool,

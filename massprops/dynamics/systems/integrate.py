@@ -18,12 +18,15 @@ kernel comes back as a status code; here it becomes the exception the run report
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from massprops.dynamics.compiled import systems_step as codes
 from massprops.dynamics.compiled.systems_fixed import DIVERGED, MAX_PIECES
 from massprops.dynamics.compiled.systems_kernel import DOP853, METHODS, run_segment
 from massprops.dynamics.compiled.systems_step import PROJECT_ITERATIONS
+from massprops.dynamics.integrators._shared import step_count
 from massprops.dynamics.systems.system import SingularPose
 from massprops.errors import RunBudgetError, setting_ref
 
@@ -53,10 +56,18 @@ NARROW_RESOLUTION = 1e-10
 NARROW_STEPS = 100_000
 """Steps one locating run may take."""
 
+CALL_STEPS = 20_000
+"""Steps (with the fixed-step methods' retried pieces) one compiled call may take before it
+hands control back: between calls Ctrl-C and the progress bar are served. Calls are cut by step
+counts, never by timers, so results do not depend on the machine. A call stopped there goes on
+from its last accepted state: DOP853 with a fresh first step (two evaluations per call), the
+fixed-step methods on the same grid."""
+
 
 class Run:
     """Samples ``y_out`` (n_out, ny) at ``t_out``, steps, evaluations, rejected steps, the
-    largest projection corrections (position tangent, velocity) and the failure (None)."""
+    largest projection corrections (position tangent, velocity) and the failure (None);
+    ``t_reached`` (s) and the state ``y_last`` there; ``interrupted``: Ctrl-C stopped it."""
 
     def __init__(self, n_out: int, ny: int) -> None:
         self.y_out = np.full((n_out, ny), np.nan)
@@ -64,18 +75,24 @@ class Run:
         self.moved_q = self.moved_u = 0.0
         self.failure: BaseException | None = None
         self.t_reached = 0.0
+        self.y_last: np.ndarray | None = None
+        self.interrupted = False
 
 
 def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors: np.ndarray,
-              windows: np.ndarray, max_steps: int = MAX_STEPS, method: str = "dop853") -> Run:
+              windows: np.ndarray, max_steps: int = MAX_STEPS, method: str = "dop853",
+              progress: Callable[[float], None] | None = None) -> Run:
     """Integrate from t = 0 over [0, t_out[-1]] with ``method`` (dop853: ``setting`` is rtol;
     rk4, midpoint, implicit: the step h, s), stepping onto each window edge in ``windows``
     (sorted times where the loads jump). A singular pose, a failed projection, a step-size
     underflow or the step limit stops the run: ``Run.failure`` holds it and the samples before
-    it are kept. ``system.margin`` becomes this run's singularity margin."""
+    it are kept. ``system.margin`` becomes this run's singularity margin. ``progress(fraction
+    of the run)`` is called between compiled calls (CALL_STEPS); Ctrl-C there ends the run
+    with what it computed (``Run.interrupted``)."""
     t_out = np.ascontiguousarray(t_out, dtype=float)
     run = Run(len(t_out), y0.size)
-    edges = [0.0, *[w for w in windows if 0 < w < t_out[-1]], float(t_out[-1])]
+    duration = float(t_out[-1])
+    edges = [0.0, *[w for w in windows if 0 < w < duration], duration]
     y = np.array(y0, dtype=float)
     scales = np.maximum(np.abs(y), floors)
     kout = 0
@@ -84,10 +101,39 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors:
         kout += 1
     istats, fstats, accepted_b, accepted_u = _run_arrays(system, kout)
     yfail = np.zeros(y.size)
+    try:
+        _segments(system, y, edges, setting, method, scales, floors, t_out, run, istats,
+                  fstats, accepted_b, accepted_u, yfail, max_steps, progress)
+    except KeyboardInterrupt:  # y and run.t_reached hold the last finished call's end
+        run.interrupted = True
+    run.y_last = y
+    run.steps, run.nfev, run.rejected = (int(v) for v in istats[:3])
+    run.moved_q, run.moved_u = float(fstats[0]), float(fstats[1])
+    system.margin = float(fstats[2])
+    return run
+
+
+def _segments(system, y, edges, setting, method, scales, floors, t_out, run, istats, fstats,
+              accepted_b, accepted_u, yfail, max_steps, progress) -> None:
+    """`integrate`'s walk over the segments between window edges, each in compiled calls of
+    at most CALL_STEPS steps."""
     for t0, t1 in zip(edges[:-1], edges[1:]):
         within = scales.copy()  # each segment's error scales start from y0's running maxima
-        run_segment(system.program, y, t0, t1, float(setting), METHODS[method], within, t_out,
-                    run.y_out, istats, fstats, accepted_b, accepted_u, max_steps, yfail)
+        # a fixed-step segment resumed mid-way keeps its grid: its own equal step, not h (the
+        # kernels' step_count, in Python: a compiled `inner` has no wrapper to call from here)
+        h = float(setting) if method == "dop853" else \
+            (t1 - t0) / step_count.py_func(t0, t1, setting)
+        start = t0
+        while True:
+            bound = min(max_steps, int(istats[0] + istats[2]) + CALL_STEPS)
+            run_segment(system.program, y, start, t1, h, METHODS[method], within, t_out,
+                        run.y_out, istats, fstats, accepted_b, accepted_u, bound, yfail)
+            if istats[3] != codes.STEP_LIMIT or bound >= max_steps:
+                break
+            istats[3] = codes.OK  # this call's share, not the run bound: go on from there
+            start = run.t_reached = float(fstats[3])
+            if progress is not None:
+                progress(start / edges[-1])
         if istats[3] != codes.OK:
             jumped = None
             if istats[3] == codes.CROSSED and fstats[4] < fstats[3]:  # a step jumped across it
@@ -98,12 +144,10 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors:
                 jumped = None if seen else _jumped(system, low, high, method)
             run.failure = jumped or _failure(system, int(istats[3]), fstats, yfail, max_steps,
                                              method)
-            break
+            return
         run.t_reached = t1
-    run.steps, run.nfev, run.rejected = (int(v) for v in istats[:3])
-    run.moved_q, run.moved_u = float(fstats[0]), float(fstats[1])
-    system.margin = float(fstats[2])
-    return run
+        if progress is not None:
+            progress(t1 / edges[-1])
 
 
 def _run_arrays(system, kout: int) -> tuple:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import io
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -54,6 +55,7 @@ class SystemResult:
     holding: list | None = None  # per scene joint: the static forces at the final pose
     integrator: str = "dop853"
     reason: str = REASONS["dop853"]
+    interrupted: bool = False  # Ctrl-C stopped the run: the samples end where it got
 
     def as_dict(self) -> dict:
         s, sc = self.samples, self.scene
@@ -75,6 +77,7 @@ class SystemResult:
                 "reason": f"system: {self.reason}; projected onto the joints",
                 "steps": self.steps, "evaluations": self.evaluations,
                 "rejected_steps": self.rejected, "wall_time_s": self.wall_time_s,
+                "interrupted": self.interrupted,
                 "final": {"t": float(s.t[-1]), "bodies": bodies, "joints": joints},
                 "diagnostics": self.diagnostics}
 
@@ -149,13 +152,16 @@ def _windows(scene: SystemScene) -> np.ndarray:
 def simulate_system(scene: SystemScene, *, integrator: str | None = None,
                     rtol: float | None = None, step: float | None = None,
                     every: float | None = None, estimate: bool = True, notice=None,
-                    max_steps: int | None = None) -> SystemResult:
+                    max_steps: int | None = None,
+                    progress: Callable[[float], None] | None = None) -> SystemResult:
     """Run ``scene`` with ``integrator`` (SYSTEM_INTEGRATORS; default the scene's) at ``rtol``
     (dop853) or ``step`` (s, the fixed-step ones; default the scene's, else `default_step`);
     ComputationError (exit 3) at a singular pose or a failed step,
     RunBudgetError once a run takes ``max_steps`` steps (default: integrate.MAX_STEPS).
     ``notice(text)``: told once if the step loop's kernel has to be compiled (see
-    `compiled.compiling.prepare`)."""
+    `compiled.compiling.prepare`). ``progress(fraction)`` is called between the run's compiled
+    calls; Ctrl-C there returns the samples computed so far with ``interrupted`` set (no error
+    estimate; the caller exits 130)."""
     # deferred: dynamics.simulate brings the one-body run's modules (the output-time rule is
     # shared, the rest is not needed here)
     from massprops.dynamics.simulate import sample_times
@@ -177,8 +183,10 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     floors = _floors(system, duration)
     start = time.perf_counter()
     limit = max_steps or MAX_STEPS
-    run = integrate(system, y0, t_out, setting, floors, _windows(scene), limit, name)
+    run = integrate(system, y0, t_out, setting, floors, _windows(scene), limit, name, progress)
     wall = time.perf_counter() - start
+    if run.interrupted:
+        t_out = _reached(run, t_out)
     if isinstance(run.failure, RunBudgetError):
         raise run.failure
     if run.failure is not None:
@@ -213,7 +221,7 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     if system.m > system.rank:
         notes.append(f"{scene.source}: {system.m - system.rank} redundant constraint(s): the "
                      "reactions reported are the minimum-norm choice, not unique")
-    if estimate:
+    if estimate and not run.interrupted:
         diagnostics["error_estimate"] = error_estimate(system, y0, t_out, name, setting, floors,
                                                        _windows(scene), samples, 2 * limit,
                                                        run.steps)
@@ -222,7 +230,19 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
             notes.append(note)
     held = _holding(system, run.y_out[-1], notes)
     return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics, scene,
-                        tuple(notes), held, name, reason)
+                        tuple(notes), held, name, reason, run.interrupted)
+
+
+def _reached(run, t_out: np.ndarray) -> np.ndarray:
+    """The output times an interrupted ``run`` reached, its samples cut to them, and its last
+    state appended where that falls between two (as a one-body run's)."""
+    keep = t_out <= run.t_reached
+    t_kept, y_kept = t_out[keep], run.y_out[keep]
+    if not len(t_kept) or t_kept[-1] < run.t_reached:
+        t_kept = np.append(t_kept, run.t_reached)
+        y_kept = np.vstack([y_kept, run.y_last])
+    run.y_out = y_kept
+    return t_kept
 
 
 def _holding(system: System, y: np.ndarray, notes: list[str]) -> list | None:
