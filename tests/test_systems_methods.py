@@ -428,9 +428,9 @@ def test_dop853_cut_into_calls_stays_within_its_estimate(pendulum, monkeypatch):
 
 def test_ctrl_c_keeps_what_was_computed(four_bar, monkeypatch):
     four_bar = four_bar[0]
-    """Ctrl-C between compiled calls ends the run with its samples up to where it got: the
-    result says interrupted, has no error estimate, and its last sample is the state reached
-    (on the motion: the same as the uncut run there, to its error)."""
+    """Ctrl-C between compiled calls ends the run with its samples up to where it got (for a
+    caller that asks, as the CLI; else it propagates): the result says interrupted, has no
+    error estimate, and its samples are the motion's (the uncut run's, to its error)."""
     from massprops.dynamics.systems import integrate
 
     monkeypatch.setattr(integrate, "CALL_STEPS", 10)
@@ -441,7 +441,11 @@ def test_ctrl_c_keeps_what_was_computed(four_bar, monkeypatch):
         if len(calls) == 2:
             raise KeyboardInterrupt
 
-    part = simulate_system(four_bar, rtol=1e-9, every=0.01, progress=progress)
+    with pytest.raises(KeyboardInterrupt):  # a library caller that keeps nothing partial
+        simulate_system(four_bar, rtol=1e-9, every=0.01, progress=progress)
+    calls.clear()
+    part = simulate_system(four_bar, rtol=1e-9, every=0.01, progress=progress,
+                           interruptible=True)
     assert part.interrupted and part.as_dict()["interrupted"] is True
     assert part.diagnostics["error_estimate"] is None
     reached = part.samples.t[-1]

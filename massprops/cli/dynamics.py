@@ -269,7 +269,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     try:
         result = simulate_system(scene, integrator=integrator, rtol=rtol, step=step,
                                  every=sampling, notice=say_note, max_steps=max_steps,
-                                 progress=progress)
+                                 progress=progress, interruptible=True)
     finally:
         progress.close()
     say_notes(result.notes)

@@ -114,6 +114,8 @@ def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
     bound = min(limit, COMPANION_GROWTH * max(steps, 1000))
     for other in companion_settings(spec.kind, setting):
         run = integrate(system, y0, t_out, other, floors, windows, bound, name)
+        if run.interrupted:  # Ctrl-C while the estimate ran
+            raise KeyboardInterrupt
         if run.failure is not None:
             break
         found.append(evaluate_states(system, t_out, run.y_out))

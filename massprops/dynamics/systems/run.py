@@ -153,15 +153,16 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
                     rtol: float | None = None, step: float | None = None,
                     every: float | None = None, estimate: bool = True, notice=None,
                     max_steps: int | None = None,
-                    progress: Callable[[float], None] | None = None) -> SystemResult:
+                    progress: Callable[[float], None] | None = None,
+                    interruptible: bool = False) -> SystemResult:
     """Run ``scene`` with ``integrator`` (SYSTEM_INTEGRATORS; default the scene's) at ``rtol``
     (dop853) or ``step`` (s, the fixed-step ones; default the scene's, else `default_step`);
     ComputationError (exit 3) at a singular pose or a failed step,
     RunBudgetError once a run takes ``max_steps`` steps (default: integrate.MAX_STEPS).
     ``notice(text)``: told once if the step loop's kernel has to be compiled (see
     `compiled.compiling.prepare`). ``progress(fraction)`` is called between the run's compiled
-    calls; Ctrl-C there returns the samples computed so far with ``interrupted`` set (no error
-    estimate; the caller exits 130)."""
+    calls. Ctrl-C there propagates, or with ``interruptible`` returns the samples computed so
+    far with ``interrupted`` set (no error estimate; the CLI exits 130)."""
     # deferred: dynamics.simulate brings the one-body run's modules (the output-time rule is
     # shared, the rest is not needed here)
     from massprops.dynamics.simulate import sample_times
@@ -185,6 +186,8 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     limit = max_steps or MAX_STEPS
     run = integrate(system, y0, t_out, setting, floors, _windows(scene), limit, name, progress)
     wall = time.perf_counter() - start
+    if run.interrupted and not interruptible:
+        raise KeyboardInterrupt
     if run.interrupted:
         t_out = _reached(run, t_out)
     if isinstance(run.failure, RunBudgetError):
