@@ -454,3 +454,28 @@ def test_ctrl_c_keeps_what_was_computed(four_bar, monkeypatch):
     whole = simulate_system(four_bar, rtol=1e-9, every=0.01, estimate=False)
     at = np.searchsorted(whole.samples.t, part.samples.t[-2])
     assert np.abs(part.samples.coordinates[0][-2] - whole.samples.coordinates[0][at]).max() < 1e-6
+
+
+def test_cli_ctrl_c_on_a_system_writes_what_was_computed_and_exits_130(run, tmp_path,
+                                                                       monkeypatch):
+    from massprops.dynamics.systems import integrate
+    from massprops.dynamics.systems import run as system_run
+
+    real, count = system_run.simulate_system, [0]
+
+    def progress(fraction: float) -> None:
+        count[0] += 1
+        if count[0] == 2:
+            raise KeyboardInterrupt
+
+    def interrupted(scene, **kw):
+        return real(scene, **{**kw, "progress": progress})
+
+    monkeypatch.setattr(integrate, "CALL_STEPS", 10)
+    monkeypatch.setattr(system_run, "simulate_system", interrupted)
+    out = tmp_path / "out.csv"
+    res = run("simulate", "--json", str(SAMPLES / "four_bar.yaml"), "--rtol", "1e-9",
+              "--output", str(out))
+    assert res.exit_code == 130 and "interrupted" in res.stderr
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert 0 < data[-1, 0] < 5.0 and np.isfinite(data).all()

@@ -185,6 +185,8 @@ def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out:
 
 def _trajectory(scene, program, spec, setting, t_out):
     run = run_once(scene, program, spec, setting, t_out)
+    if run.interrupted:  # Ctrl-C: a part of a run is no reference
+        raise KeyboardInterrupt
     if run.failure is not None:
         raise ComputationError(f"{scene.source}: the reference run failed: {run.failure}")
     return to_world(scene, run.t, run.y, program, with_energy=False)
@@ -202,10 +204,14 @@ def _rung(scene, program, spec, setting, t_out, truth, scales) -> PrecisionRun:
             return PrecisionRun(spec.name, setting, name, None, None, None, 0, 0, why)
         return PrecisionRun(spec.name, setting, name, part.wall_time_s, None, None, part.steps,
                             part.evaluations, why)
+    if result.interrupted:  # Ctrl-C: a part of a run is no rung (simulate returns it whole)
+        raise KeyboardInterrupt
     error = state_error(result.trajectory, truth, scales)
     wall, spent, tries = result.wall_time_s, result.wall_time_s, 1
     while spent < MIN_TIMED_S and tries < 5:  # best of repeats: only the main run is timed
         again = run_once(scene, program, spec, setting, t_out)
+        if again.interrupted:
+            raise KeyboardInterrupt
         wall, spent, tries = min(wall, again.wall), spent + again.wall, tries + 1
     measured = math.isfinite(error)
     return PrecisionRun(spec.name, setting, name, wall, error if measured else None,
