@@ -67,7 +67,8 @@ fixed-step methods on the same grid."""
 class Run:
     """Samples ``y_out`` (n_out, ny) at ``t_out``, steps, evaluations, rejected steps, the
     largest projection corrections (position tangent, velocity) and the failure (None);
-    ``t_reached`` (s) and the state ``y_last`` there; ``interrupted``: Ctrl-C stopped it."""
+    ``t_reached`` (s) and the state ``y_last`` there; ``interrupted``: Ctrl-C stopped it;
+    ``margin``: the smallest singularity margin it kept (`System.margin`)."""
 
     def __init__(self, n_out: int, ny: int) -> None:
         self.y_out = np.full((n_out, ny), np.nan)
@@ -77,18 +78,21 @@ class Run:
         self.t_reached = 0.0
         self.y_last: np.ndarray | None = None
         self.interrupted = False
+        self.margin = 1.0
 
 
 def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors: np.ndarray,
               windows: np.ndarray, max_steps: int = MAX_STEPS, method: str = "dop853",
-              progress: Callable[[float], None] | None = None) -> Run:
+              progress: Callable[[float], None] | None = None,
+              watch: Callable[[int], None] | None = None) -> Run:
     """Integrate from t = 0 over [0, t_out[-1]] with ``method`` (dop853: ``setting`` is rtol;
     rk4, midpoint, implicit: the step h, s), stepping onto each window edge in ``windows``
     (sorted times where the loads jump). A singular pose, a failed projection, a step-size
     underflow or the step limit stops the run: ``Run.failure`` holds it and the samples before
-    it are kept. ``system.margin`` becomes this run's singularity margin. ``progress(fraction
-    of the run)`` is called between compiled calls (CALL_STEPS); Ctrl-C there ends the run
-    with what it computed (``Run.interrupted``)."""
+    it are kept. ``Run.margin`` is the run's singularity margin (``system`` is only read: runs
+    of one system may go side by side). ``progress(fraction of the run)`` and ``watch(steps
+    so far)`` are called between compiled calls (CALL_STEPS); Ctrl-C there, or either raising
+    KeyboardInterrupt, ends the run with what it computed (``Run.interrupted``)."""
     t_out = np.ascontiguousarray(t_out, dtype=float)
     run = Run(len(t_out), y0.size)
     duration = float(t_out[-1])
@@ -103,18 +107,18 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors:
     yfail = np.zeros(y.size)
     try:
         _segments(system, y, edges, setting, method, scales, floors, t_out, run, istats,
-                  fstats, accepted_b, accepted_u, yfail, max_steps, progress)
+                  fstats, accepted_b, accepted_u, yfail, max_steps, progress, watch)
     except KeyboardInterrupt:  # y and run.t_reached hold the last finished call's end
         run.interrupted = True
     run.y_last = y
     run.steps, run.nfev, run.rejected = (int(v) for v in istats[:3])
     run.moved_q, run.moved_u = float(fstats[0]), float(fstats[1])
-    system.margin = float(fstats[2])
+    run.margin = float(fstats[2])
     return run
 
 
 def _segments(system, y, edges, setting, method, scales, floors, t_out, run, istats, fstats,
-              accepted_b, accepted_u, yfail, max_steps, progress) -> None:
+              accepted_b, accepted_u, yfail, max_steps, progress, watch) -> None:
     """`integrate`'s walk over the segments between window edges, each in compiled calls of
     at most CALL_STEPS steps."""
     for t0, t1 in zip(edges[:-1], edges[1:]):
@@ -134,6 +138,8 @@ def _segments(system, y, edges, setting, method, scales, floors, t_out, run, ist
             start = run.t_reached = float(fstats[3])
             if progress is not None:
                 progress(start / edges[-1])
+            if watch is not None:
+                watch(int(istats[0]))
         if istats[3] != codes.OK:
             jumped = None
             if istats[3] == codes.CROSSED and fstats[4] < fstats[3]:  # a step jumped across it

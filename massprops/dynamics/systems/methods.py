@@ -18,6 +18,7 @@ from massprops.dynamics.systems.integrate import integrate
 from massprops.dynamics.systems.outputs import Samples, distance, evaluate_states
 from massprops.dynamics.systems.stiffness import fastest_rate, unresolved_mode_error
 from massprops.dynamics.systems.system import System
+from massprops.parallel import CancellableJob
 
 SYSTEM_INTEGRATORS = ("auto", "dop853", "rk4", "midpoint", "implicit")
 """What a system scene may name: the registry's methods with a systems kernel over [q, u]
@@ -94,9 +95,76 @@ did not resolve, and the estimate is None rather than minutes more of stepping (
 11-link chain: 10 s of main run, then 79 s of a companion running into its bound)."""
 
 
+class Companions:
+    """The error estimate's companion runs (`accuracy.companion_settings`), one after the other
+    on a helper thread beside the main run: the compiled calls release the GIL, so on two
+    cores the estimate adds little to the main run's wall time. Each run is deterministic in
+    its own arrays: the numbers are those of running them after the main run. ``cap`` (set
+    once the main run's steps are known) bounds each at COMPANION_GROWTH times as many: one
+    that goes beyond stops at its next call (by step counts, so the outcome does not depend on
+    the machine)."""
+
+    def __init__(self, system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
+                 settings: tuple, floors: np.ndarray, windows: np.ndarray, limit: int) -> None:
+        self.cap: int | None = None
+        self.capped = False
+
+        def watch(steps: int) -> None:
+            if self.cap is not None and steps > self.cap:
+                self.capped = True
+                raise KeyboardInterrupt  # integrate ends the run there (interrupted)
+
+        def runs(report) -> list:
+            out = []
+            for k, other in enumerate(settings):
+                run = integrate(system, y0, t_out, other, floors, windows, limit, name,
+                                lambda f, k=k: report((k + f) / len(settings)), watch)
+                out.append(run)
+                if run.interrupted or run.failure is not None:
+                    break  # the next could add nothing
+            return out
+
+        self.job = CancellableJob(runs)
+
+    @property
+    def fraction(self) -> float:
+        return self.job.fraction
+
+    def stop(self) -> None:
+        self.job.stop()
+
+    def result(self, steps: int, poll) -> list | None:
+        """The runs, each None where it stopped at the cap or failed, once the main run took
+        ``steps``; None on Ctrl-C while waiting. A run that already went past the cap is
+        judged by it too: the outcome is the one of running them afterwards."""
+        self.cap = COMPANION_GROWTH * max(steps, 1000)
+        try:
+            runs = self.job.result(poll)
+        except KeyboardInterrupt:
+            self.job.stop()
+            raise
+        return [None if (r.interrupted or r.failure is not None or r.steps > self.cap) else r
+                for r in runs]
+
+
+def start_companions(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
+                     setting: float, floors: np.ndarray, windows: np.ndarray,
+                     limit: int) -> Companions | None:
+    """The companion runs of a run of ``name`` at ``setting``, started (None: a method that
+    needs none)."""
+    # deferred: the registry imports the one-body kernels' modules (their kinds only here)
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    settings = companion_settings(INTEGRATORS[name].kind, setting)
+    if not settings:
+        return None
+    return Companions(system, y0, t_out, name, settings, floors, windows, limit)
+
+
 def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
                    setting: float, floors: np.ndarray, windows: np.ndarray, samples: Samples,
-                   limit: int, steps: int) -> float | None:
+                   limit: int, steps: int, side: Companions | None = None,
+                   progress=None) -> float | None:
     """The run's global error estimate from its companion runs (`accuracy.companion_settings`
     and `global_estimate`, in the systems' metric `outputs.distance`), and for a stiff method
     at a step that does not resolve the fastest rate at least
@@ -105,18 +173,21 @@ def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
     credited its full order where the step resolves the start's fastest rate (h ρ < 1): there
     is no stiff mode to reduce it, and the reduced credit overstated the four-bar's error
     18-fold at h = 20 ms. ``limit``: the probe's run bound; ``steps``: the main run's (its
-    companions are bounded at COMPANION_GROWTH times as many)."""
+    companions are bounded at COMPANION_GROWTH times as many); ``side``: the companions
+    started beside the main run (`start_companions`; None: started here);
+    ``progress(fraction)`` moved meanwhile, from ½ to 1."""
     # deferred: the registry imports the one-body kernels' modules (their orders only here)
     from massprops.dynamics.integrators import INTEGRATORS
 
     spec, size = INTEGRATORS[name], system.scene.size
+    if side is None:
+        side = start_companions(system, y0, t_out, name, setting, floors, windows, limit // 2)
+    if side is None:
+        return None
+    poll = None if progress is None else (lambda: progress(0.5 + 0.5 * side.fraction))
     found = []
-    bound = min(limit, COMPANION_GROWTH * max(steps, 1000))
-    for other in companion_settings(spec.kind, setting):
-        run = integrate(system, y0, t_out, other, floors, windows, bound, name)
-        if run.interrupted:  # Ctrl-C while the estimate ran
-            raise KeyboardInterrupt
-        if run.failure is not None:
+    for run in side.result(steps, poll):
+        if run is None:
             break
         found.append(evaluate_states(system, t_out, run.y_out))
     if not found:

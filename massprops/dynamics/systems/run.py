@@ -25,6 +25,7 @@ from massprops.dynamics.systems.methods import (
     choose,
     error_estimate,
     kind_of,
+    start_companions,
 )
 from massprops.dynamics.systems.model import SystemScene
 from massprops.dynamics.systems.outputs import Samples, evaluate
@@ -184,8 +185,23 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     floors = _floors(system, duration)
     start = time.perf_counter()
     limit = max_steps or MAX_STEPS
-    run = integrate(system, y0, t_out, setting, floors, _windows(scene), limit, name, progress)
+    side = start_companions(system, y0, t_out, name, setting, floors, _windows(scene),
+                            limit) if estimate else None
+    try:  # the companions stop with the run, whatever ends it (a finished one: at once)
+        return _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, start,
+                       notes, side, progress, interruptible)
+    finally:
+        if side is not None:
+            side.stop()
+
+
+def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, start, notes, side,
+            progress, interruptible) -> SystemResult:
+    """`simulate_system` from the main run on, its companions running beside it (``side``)."""
+    run = integrate(system, y0, t_out, setting, floors, _windows(scene), limit, name,
+                    None if progress is None else _joint_progress(progress, side))
     wall = time.perf_counter() - start
+    system.margin = run.margin
     if run.interrupted and not interruptible:
         raise KeyboardInterrupt
     if run.interrupted:
@@ -209,7 +225,7 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
         "degrees_of_freedom": system.nv - system.rank,
         "redundant_constraints": system.m - system.rank,
         "projection": {"position": run.moved_q, "velocity": run.moved_u},
-        "singularity_margin": system.margin if system.m else None,
+        "singularity_margin": run.margin if system.m else None,
         "reactions": ("unique" if system.m == system.rank else
                       "minimum-norm multipliers: the redundant constraints' reactions are not "
                       "unique; the smallest set of loop forces is reported"),
@@ -224,16 +240,27 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     if system.m > system.rank:
         notes.append(f"{scene.source}: {system.m - system.rank} redundant constraint(s): the "
                      "reactions reported are the minimum-norm choice, not unique")
-    if estimate and not run.interrupted:
-        diagnostics["error_estimate"] = error_estimate(system, y0, t_out, name, setting, floors,
-                                                       _windows(scene), samples, 2 * limit,
-                                                       run.steps)
+    if side is not None and not run.interrupted:  # estimate asked (and a method with companions)
+        try:
+            diagnostics["error_estimate"] = error_estimate(
+                system, y0, t_out, name, setting, floors, _windows(scene), samples, 2 * limit,
+                run.steps, side, progress)
+        except KeyboardInterrupt:  # Ctrl-C while the companions ran: the run itself stands
+            if not interruptible:
+                raise
         note = estimate_note(scene.source, diagnostics["error_estimate"], name, kind_of(name))
         if note is not None:
             notes.append(note)
     held = _holding(system, run.y_out[-1], notes)
     return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics, scene,
                         tuple(notes), held, name, reason, run.interrupted)
+
+
+def _joint_progress(progress: Callable[[float], None], side) -> Callable[[float], None]:
+    """The main run's progress: the mean of its fraction and its companions' (as one body's)."""
+    if side is None:
+        return progress
+    return lambda fraction: progress(0.5 * fraction + 0.5 * side.fraction)
 
 
 def _reached(run, t_out: np.ndarray) -> np.ndarray:
