@@ -101,28 +101,24 @@ class UsageError(MassPropsError, ValueError):
 
 # --- exit 3: the computation itself failed -------------------------------------------------------
 class ComputationError(MassPropsError, ArithmeticError):
-    """The computation failed although its inputs were valid (exit 3)."""
-
-
-class DivergenceError(ComputationError):
-    """An integration produced NaN or grew without bound.
-
-    ``partial`` holds what was computed up to the failure (a SimulationResult), so the caller can
-    still write it out."""
+    """The computation failed although its inputs were valid (exit 3). ``partial``: what a run
+    computed up to the failure (a SimulationResult or a SystemResult; None when nothing ran),
+    so that the caller can still write it out."""
 
     def __init__(self, message: str, partial: object = None) -> None:
         super().__init__(message)
         self.partial = partial
+
+
+class DivergenceError(ComputationError):
+    """An integration produced NaN or grew without bound (``partial`` as for every
+    ComputationError)."""
 
 
 class RunBudgetError(ComputationError):
     """A run would need, or has taken, more steps or samples than the run bound allows
     (massprops.dynamics.budget): refused up front, or stopped with ``partial`` holding what was
-    computed (a SimulationResult, or None when nothing ran)."""
-
-    def __init__(self, message: str, partial: object = None) -> None:
-        super().__init__(message)
-        self.partial = partial
+    computed (None when nothing ran)."""
 
 
 # --- exit 4: a check ran, and what was checked disagrees -----------------------------------------

@@ -479,3 +479,24 @@ def test_cli_ctrl_c_on_a_system_writes_what_was_computed_and_exits_130(run, tmp_
     assert res.exit_code == 130 and "interrupted" in res.stderr
     data = np.loadtxt(out, delimiter=",", skiprows=1)
     assert 0 < data[-1, 0] < 5.0 and np.isfinite(data).all()
+
+
+def test_cli_a_failed_system_run_writes_what_it_reached(run, tmp_path):
+    """A system run stopped by the run bound (exit 3) still writes the samples it reached, as a
+    one-body run does; the error carries them (ComputationError.partial)."""
+    from massprops.errors import RunBudgetError
+
+    scene = _scene("four_bar", 5.0)
+    with pytest.raises(RunBudgetError) as info:
+        simulate_system(scene, rtol=1e-10, every=0.01, max_steps=60, estimate=False)
+    part = info.value.partial
+    assert 0 < part.samples.t[-1] < 5.0 and np.isfinite(part.samples.force).all()
+    whole = simulate_system(scene, rtol=1e-10, every=0.01, estimate=False)
+    n = len(part.samples.t)
+    assert np.abs(part.samples.coordinates[0] - whole.samples.coordinates[0][:n]).max() < 1e-6
+    out = tmp_path / "out.csv"
+    res = run("simulate", str(SAMPLES / "four_bar.yaml"), "--rtol", "1e-10", "--every", "0.01",
+              "--max-steps", "60", "--output", str(out))
+    assert res.exit_code == 3 and "max_steps" in res.stderr.replace("-", "_")
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert len(data) == n and np.isfinite(data).all()

@@ -10,6 +10,7 @@ import click
 
 from massprops.cli.app import cli
 from massprops.cli.common import emit_json, guarded, positive, say_note, say_notes, say_warning
+from massprops.errors import ComputationError
 
 
 class RegistryChoice(click.ParamType):
@@ -266,16 +267,20 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     if sampling is None and (out or plot_path):
         sampling = scene.time.duration / 1000
     progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+    protect = [scene_path, *scene.input_files]
     try:
         result = simulate_system(scene, integrator=integrator, rtol=rtol, step=step,
                                  every=sampling, notice=say_note, max_steps=max_steps,
                                  progress=progress, interruptible=True)
+    except ComputationError as exc:  # keep what was computed, exit 3
+        if out and exc.partial is not None and len(exc.partial.samples.t):
+            write_system_trajectory(exc.partial, out, force=force, protect=protect)
+        raise
     finally:
         progress.close()
     say_notes(result.notes)
     if out:
-        write_system_trajectory(result, out, force=force,
-                                protect=[scene_path, *scene.input_files])
+        write_system_trajectory(result, out, force=force, protect=protect)
     if plot_path:
         from massprops.dynamics.systems.plots import plot_system  # matplotlib: --plot only
 

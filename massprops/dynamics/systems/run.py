@@ -206,10 +206,12 @@ def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, star
         raise KeyboardInterrupt
     if run.interrupted:
         t_out = _reached(run, t_out)
-    if isinstance(run.failure, RunBudgetError):
-        raise run.failure
-    if run.failure is not None:
-        raise ComputationError(str(run.failure).splitlines()[0]) from run.failure
+    if run.failure is not None:  # the samples it reached go with the error, to be written
+        part = _partial(system, t_out, run, wall, notes, name, reason)
+        if isinstance(run.failure, RunBudgetError):
+            raise RunBudgetError(run.failure.template, partial=part) from run.failure
+        raise ComputationError(str(run.failure).splitlines()[0], partial=part) \
+            from run.failure
     energy = None
     if system.cannot_gain_energy():
         with np.errstate(all="ignore"):  # a diverged run's energy may overflow: said below
@@ -254,6 +256,18 @@ def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, star
     held = _holding(system, run.y_out[-1], notes)
     return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics, scene,
                         tuple(notes), held, name, reason, run.interrupted)
+
+
+def _partial(system: System, t_out: np.ndarray, run, wall: float, notes: list, name: str,
+             reason: str) -> SystemResult:
+    """What a failed ``run`` computed: its samples up to the first one it did not reach (the
+    kernels fill them in order and stop at a state that is not finite), no estimate."""
+    filled = np.isfinite(run.y_out).all(axis=1)
+    n = len(filled) if filled.all() else int(np.argmin(filled))
+    samples = evaluate(system, t_out[:n], run.y_out[:n])
+    diagnostics = {"energy_rel_drift": None, "error_estimate": None}
+    return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics,
+                        system.scene, tuple(notes), None, name, reason)
 
 
 def _joint_progress(progress: Callable[[float], None], side) -> Callable[[float], None]:
