@@ -53,6 +53,9 @@ NARROW_RESOLUTION = 1e-10
 NARROW_STEPS = 100_000
 """Steps one locating run may take."""
 
+NO_OUT = np.zeros((0, 0))
+"""`run_segment`'s outputs array, unread by a step loop (`outputs` evaluates samples)."""
+
 
 class Run:
     """Samples ``y_out`` (n_out, ny) at ``t_out``, steps, evaluations, rejected steps, the
@@ -87,7 +90,7 @@ def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors:
     for t0, t1 in zip(edges[:-1], edges[1:]):
         within = scales.copy()  # each segment's error scales start from y0's running maxima
         run_segment(system.program, y, t0, t1, float(setting), METHODS[method], within, t_out,
-                    run.y_out, istats, fstats, accepted_b, accepted_u, max_steps, yfail)
+                    run.y_out, istats, fstats, accepted_b, accepted_u, max_steps, yfail, NO_OUT)
         if istats[3] != codes.OK:
             jumped = None
             if istats[3] == codes.CROSSED and fstats[4] < fstats[3]:  # a step jumped across it
@@ -134,7 +137,7 @@ def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales:
         for a, b in zip(edges[:-1], edges[1:]):
             run_segment(system.program, trial, float(a), float(b), min(float(rtol), NARROW_RTOL),
                         DOP853, scales_k.copy(), np.empty(0), np.empty((0, n)), istats, fstats,
-                        accepted_b, accepted_u, NARROW_STEPS, np.zeros(n))
+                        accepted_b, accepted_u, NARROW_STEPS, np.zeros(n), NO_OUT)
             if istats[3] != codes.OK:
                 break
         if istats[3] != codes.CROSSED:
