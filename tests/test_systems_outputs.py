@@ -94,12 +94,15 @@ world's joints O, R, then H reach the rod before P does), every joint loaded so 
 keeps its load: a loaded cut prismatic."""
 
 
-def _loaded_cut(name: str, loads: dict) -> str:
-    """A sample whose joints get springs, dampers and drives ``loads`` (by name): a loop loaded
-    throughout keeps its breadth-first cut (`assemble`), which then carries its load."""
-    data = yaml.safe_load((SAMPLES / f"{name}.yaml").read_text())
+def _changed(text: str, changes: dict) -> str:
+    """A scene whose joints get the keys ``changes`` (by name; None drops a key). A loop with
+    a spring, damper or drive on every joint keeps its breadth-first cut (`assemble`), which
+    then carries its load."""
+    data = yaml.safe_load(text)
     for j in data["joints"]:
-        j.update(loads.get(j["name"], {}))
+        j.update(changes.get(j["name"], {}))
+        for key in [k for k, v in j.items() if v is None]:
+            del j[key]
     return yaml.safe_dump(data)
 
 
@@ -110,23 +113,33 @@ def _system(scene: str, tmp_path: Path):
     elif scene == "gears":  # a coupling (mimic), driven
         loaded = load_any_system(_scene(tmp_path, _gears(-2.0, 0.3), body="wheel1"))
     else:
+        four_bar = (SAMPLES / "four_bar.yaml").read_text()
         text = {"every_kind": EVERY_KIND, "thrown_drag": THROWN_DRAG, "pendulum": PENDULUM,
                 "reversed": REVERSED, "falling": FALLING,
-                "four_bar_loaded": _loaded_cut("four_bar", {
+                "four_bar_loaded": _changed(four_bar, {
                     "A": {"damping": 0.1}, "B": {"stiffness": 1.0}, "D": {"torque": 0.3},
                     "C": {"stiffness": 3.0, "rest": 0.2, "damping": 0.4, "torque": 0.6,
                           "end": 0.5}}),
-                "oscillating": OSCILLATING}[scene]
+                "four_bar_ball": _changed(four_bar, {"C": {"type": "spherical",
+                                                           "axis": None}}),
+                "four_bar_universal": _changed(four_bar, {"C": {
+                    "type": "universal", "axis": None, "axes": [[0, 1, 0], [1, 0, 0]]}}),
+                "oscillating": OSCILLATING,
+                "oscillating_cylinder": _changed(OSCILLATING, {"P": {
+                    "type": "cylindrical", "rest": None, "force": None, "stiffness": None,
+                    "damping": None, "end": None}})}[scene]
         loaded = parse_system(text, source=f"{scene}.yaml", base_dir=SAMPLES)
     return prepare(loaded)[:2]
 
 
-def _states(system, y0, rng, count=5, spread=0.1):
+def _states(system, y0, rng, count=4, spread=0.1):
+    """y0 and random states near it, on the joints (projected) and, with loops, off them (the
+    outputs are the same function of any state)."""
     out = [y0]
     for _ in range(count):
         y = y0 + spread * rng.standard_normal(y0.size)
         tr.normalize(system.tree, y[:system.nq])
-        out.append(system.project(y)[0] if system.m else y)
+        out += [system.project(y)[0], y] if system.m else [y]
     return np.array(out)
 
 
@@ -139,7 +152,8 @@ def _close(got, want, what, rtol=RTOL):
 
 SCENES = ["pendulum", "four_bar", "andrews", "chain10", "slider_crank", "double_pendulum",
           "mesh_pendulum", "every_kind", "thrown_drag", "reversed", "gears", "falling",
-          "four_bar_loaded", "oscillating"]
+          "four_bar_loaded", "four_bar_ball", "four_bar_universal", "oscillating",
+          "oscillating_cylinder"]
 
 
 @pytest.mark.parametrize("scene", SCENES)
@@ -168,19 +182,23 @@ def test_compiled_outputs_equal_numpy(scene, tmp_path):
 
 
 def test_the_scenes_cover_what_the_outputs_distinguish(tmp_path):
-    """The scenes above have a loaded cut revolute and prismatic, reversed tree joints of
-    every kind with a load, a coupling and a redundant loop: every branch of the reactions."""
-    loaded_cut, reversed_kinds = set(), set()
-    for scene in ("four_bar_loaded", "oscillating", "reversed", "gears", "four_bar"):
+    """The scenes above have a cut joint of every kind with coordinates, a loaded cut revolute
+    and prismatic, reversed tree joints of every kind with a load, a coupling and a redundant
+    loop: every branch of the outputs."""
+    loaded_cut, reversed_kinds, cut = set(), set(), set()
+    for scene in ("four_bar_loaded", "oscillating", "reversed", "gears", "four_bar",
+                  "four_bar_ball", "four_bar_universal", "oscillating_cylinder"):
         system, _ = _system(scene, tmp_path)
         tree = system.tree
         loaded_cut |= {system.scene.joints[tree.cut[n]].kind for n in tree.cut_loaded}
+        cut |= {system.scene.joints[k].kind for k in tree.cut}
         reversed_kinds |= {j.kind for j in tree.joints if j.reversed}
         if scene == "gears":
             assert tree.couplings
         if scene == "four_bar":
             assert system.m > system.rank if system.rank is not None else True
     assert loaded_cut == {"revolute", "prismatic"}
+    assert cut == {"revolute", "prismatic", "spherical", "universal", "cylindrical"}
     assert {"revolute", "universal", "spherical", "prismatic"} <= reversed_kinds
 
 

@@ -147,17 +147,56 @@ def _joint_states(system, y: np.ndarray, rotation: np.ndarray, com: np.ndarray,
                 c, r = -qj[:, ::-1], -uj[:, ::-1]
             else:
                 c, r = -qj, -uj
-        else:
+        elif sj.kind in ("revolute", "prismatic", "cylindrical"):
+            c, r = _cut_state(tree, sj, rotation, com, motion)
+        else:  # a cut ball or universal joint, sample by sample
             c, r = np.zeros((n, _ncoord(sj.kind))), np.zeros((n, _nrate(sj.kind)))
             for s in range(n):
                 kin = tr.Kinematics(rotation[s], com[s], motion[s], None, None, [], [])
                 c[s], r[s] = cutjoint.from_poses(tree, kin, sj)
-            if sj.kind in ("revolute", "cylindrical", "universal"):  # measured: continuous
-                for col in ([0] if sj.kind != "universal" else [0, 1]):
-                    c[:, col] = np.unwrap(c[:, col])
+        if where == "cut" and sj.kind in ("revolute", "cylindrical", "universal"):
+            for col in ([0] if sj.kind != "universal" else [0, 1]):  # measured: continuous
+                c[:, col] = np.unwrap(c[:, col])
         coords.append(c)
         rates.append(r)
     return coords, rates
+
+
+def _cut_state(tree, sj, rotation: np.ndarray, com: np.ndarray, motion: np.ndarray):
+    """`cutjoint.from_poses` of a cut revolute, prismatic or cylindrical joint ``sj`` at all
+    samples at once (rotation (n, b, 3, 3), com (n, b, 3), V = motion (n, b, 6))."""
+    n = len(rotation)
+
+    def side(body):  # (E = R R0ᵀ, ω, v_O, the joint's point) of one side, (n, ...)
+        if body == WORLD:
+            z = np.zeros((n, 3))
+            return np.broadcast_to(tr.EYE3, (n, 3, 3)), z, z, np.broadcast_to(sj.point, (n, 3))
+        b = tree.bodies[body]
+        r = rotation[:, body]
+        local = b.rotation0.T @ (sj.point - b.com0)
+        return (r @ b.rotation0.T, motion[:, body, :3], motion[:, body, 3:],
+                com[:, body] + r @ local)
+
+    (ea, wa, va, xa), (eb, wb, vb, xb) = side(sj.a), side(sj.b)
+    axis = sj.axes[0]
+    normal = cutjoint.perp(axis)
+    rel = np.einsum("nji,njk->nik", ea, eb)  # E_aᵀ E_b
+    w_rel = np.einsum("nji,nj->ni", ea, wb - wa)
+    start = normal - (normal @ axis) * axis
+    end = rel @ normal
+    end = end - (end @ axis)[:, None] * axis
+    turn = np.arctan2(np.cross(start, end) @ axis, end @ start)
+    e = ea @ axis
+    d = xb - xa
+    shift = np.einsum("ni,ni->n", d, e)
+    rate = np.einsum("ni,ni->n", vb + np.cross(wb, xb) - va - np.cross(wa, xa), e) \
+        + np.einsum("ni,ni->n", d, np.cross(wa, e))
+    spin = w_rel @ axis
+    if sj.kind == "revolute":
+        return turn[:, None], spin[:, None]
+    if sj.kind == "prismatic":
+        return shift[:, None], rate[:, None]
+    return np.stack([turn, shift], -1), np.stack([spin, rate], -1)
 
 
 def _quat_matrices(q: np.ndarray) -> np.ndarray:
