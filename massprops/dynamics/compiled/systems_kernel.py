@@ -41,10 +41,8 @@ def run_segment(prog, y, t0, t1, setting, method, scales, t_out, y_out, istats, 
     argument stays alive until the call returns."""
     ws = workspace(prog)
     if method >= systems_outputs.STATES:
-        own = systems_outputs.scratch(prog)
-        systems_outputs.evaluate(unowned(prog), unowned(ws), unowned(own), unowned(t_out),
-                                 unowned(y_out), unowned(out), unowned(istats), method,
-                                 (prog, ws, own, t_out, y_out, out, istats))
+        systems_outputs.evaluate(prog, ws, systems_outputs.scratch(prog), t_out, y_out, out,
+                                 istats, method)
         return
     arrays = (y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail)
     if method == DOP853:

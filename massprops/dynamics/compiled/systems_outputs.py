@@ -46,18 +46,22 @@ BODY_COLUMNS, JOINT_COLUMNS, RESIDUAL_COLUMNS = 18, 9, 2
 @inlined
 def scratch(prog):
     """`evaluate`'s own arrays: u̇ (nv), the bodies' net forces (n, 6), the cut joints'
-    reactions by scene joint (J, 6), λ (m), r (m), a vector of max(nv, m)."""
+    reactions by scene joint (J, 6), λ (m), r (m), a vector of max(nv, m), one cut row's
+    forces on b and on a (2, 6), and the world point positions are measured from (3,): the
+    origin, as the kinematics' (`systems_tree`)."""
     dims = prog[0]
     nv, m, n = dims[1], dims[2], dims[3]
     return (np.zeros(nv), np.zeros((n, 6)), np.zeros((prog[27].shape[0], 6)), np.zeros(m),
-            np.zeros(m), np.zeros(max(nv, m)))
+            np.zeros(m), np.zeros(max(nv, m)), np.zeros((2, 6)), np.zeros(3))
 
 
 @array_inner
-def evaluate(prog, ws, own, t_out, y_out, out, istats, mode, owners):
-    """Each sample y_out[s] (at t_out[s]) evaluated into out[s] (module doc) by ``mode``;
-    ``owners`` keeps the arrays the `unowned` views come from alive (`run_segment`)."""
-    pp, wp = by_ref(prog), by_ref(ws)
+def evaluate(prog, ws, own, t_out, y_out, out, istats, mode):
+    """Each sample y_out[s] (at t_out[s]) evaluated into out[s] (module doc) by ``mode``. The
+    tuples come as the caller owns them (alive for the call) and go on by reference
+    (`unowned.by_ref`): taking them as `unowned` views with their owners too, as the step
+    loops do, cost `run_segment` ~2 s more to compile (its views and the owners' tuple)."""
+    pp, wp, op = by_ref(prog), by_ref(ws), by_ref(own)
     nq = at(pp, 0)[0]
     udot = own[0]
     for s in range(y_out.shape[0]):
@@ -71,56 +75,50 @@ def evaluate(prog, ws, own, t_out, y_out, out, istats, mode, owners):
         else:
             kinematics(pp, q, u, wp)
         if mode == ENERGIES:
-            row[0] = _energy(pp, wp, q)
+            row[0] = _energy(pp, wp, q, own[7])
             continue
-        _bodies(wp, row)
+        _bodies(wp, row, own[7])
         if mode == OUTPUTS:
-            _reactions(pp, wp, own, u, row)
+            _reactions(pp, wp, op, u, row)
 
 
 @inlined
-def _bodies(wp, row):
+def _bodies(wp, row, ref):
     rot, com, vel = at(wp, 0), at(wp, 1), at(wp, 2)
     for i in range(com.shape[0]):
         o = BODY_COLUMNS * i
         for c in range(3):
-            row[o + c] = com[i, c]
+            row[o + c] = com[i, c] + ref[c]
             for d in range(3):
                 row[o + 3 + 3 * c + d] = rot[i, c, d]
         for c in range(6):
             row[o + 12 + c] = vel[i, c]
 
 
-@inlined
-def _point(rot, com, body, local):
-    """The world point of ``body`` at ``local`` (its frame; the world's: world) as three
-    floats."""
+@array_inner
+def _point(rot, com, ref, body, local):
+    """The point of ``body`` at ``local`` (its frame; the world's: world) as three floats,
+    world axes, from ``ref`` as the kinematics' positions. Called, not inlined: inlined at its
+    seven call sites, with `_reactions`' sums written out per primitive kind, `_reactions`
+    and `_energy` took 12 s to compile instead of 6.5 s (the outputs cost nothing per call
+    here that matters: ~µs a sample)."""
     if body < 0:
-        return local[0], local[1], local[2]
+        return local[0] - ref[0], local[1] - ref[1], local[2] - ref[2]
     r = rot[body]
     return (com[body, 0] + r[0, 0] * local[0] + r[0, 1] * local[1] + r[0, 2] * local[2],
             com[body, 1] + r[1, 0] * local[0] + r[1, 1] * local[1] + r[1, 2] * local[2],
             com[body, 2] + r[2, 0] * local[0] + r[2, 1] * local[1] + r[2, 2] * local[2])
 
 
-@inlined
+@array_inner
 def _turned(rot, body, local):
+    """R_body local (the world's: local) as three floats."""
     if body < 0:
         return local[0], local[1], local[2]
     r = rot[body]
     return (r[0, 0] * local[0] + r[0, 1] * local[1] + r[0, 2] * local[2],
             r[1, 0] * local[0] + r[1, 1] * local[1] + r[1, 2] * local[2],
             r[2, 0] * local[0] + r[2, 1] * local[1] + r[2, 2] * local[2])
-
-
-@inlined
-def _add(out, i, sign, f0, f1, f2, f3, f4, f5):
-    out[i, 0] += sign * f0
-    out[i, 1] += sign * f1
-    out[i, 2] += sign * f2
-    out[i, 3] += sign * f3
-    out[i, 4] += sign * f4
-    out[i, 5] += sign * f5
 
 
 @array_inner
@@ -151,15 +149,16 @@ def _multipliers(pp, wp, lam, r, z):
 
 
 @array_inner
-def _reactions(pp, wp, own, u, row):
+def _reactions(pp, wp, op, u, row):
     """The scene joints' reactions and points, the residuals (at the rates u), into ``row``
-    (module doc; the rule of `dynamics.systems.outputs`)."""
+    (module doc; the rule of `dynamics.systems.outputs`); op: `scratch` by reference."""
     ji, pi, pf, sj, sp = at(pp, 1), at(pp, 12), at(pp, 13), at(pp, 27), at(pp, 28)
     ct, cv = at(pp, 23), at(pp, 24)
     rot, com, vel, acc, inert = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3), at(wp, 4)
     s, pts, cb, fext, tau = at(wp, 5), at(wp, 6), at(wp, 7), at(wp, 11), at(wp, 12)
     phi, g, rb, ra = at(wp, 19), at(wp, 23), at(wp, 21), at(wp, 22)
-    udot, net, cut, lam = own[0], own[1], own[2], own[3]
+    udot, net, cut, lam, fs, ref = at(op, 0), at(op, 1), at(op, 2), at(op, 3), at(op, 6), \
+        at(op, 7)
     size = at(pp, 20)[0]
     m, nv = g.shape[0], g.shape[1]
     for k in range(ji.shape[0]):  # the true accelerations (the kinematics' are at u̇ = 0)
@@ -179,38 +178,37 @@ def _reactions(pp, wp, own, u, row):
         for c in range(6):
             cut[k, c] = 0.0
     if m:
-        _multipliers(pp, wp, lam, own[4], own[5])
-    for n in range(pi.shape[0]):  # each cut row's force λ ρ on b (and on a)
+        _multipliers(pp, wp, lam, at(op, 4), at(op, 5))
+    for n in range(pi.shape[0]):  # each cut row's force λ ρ on b (fs[0]) and on a (fs[1])
         kind, a, b, r0, k = pi[n, 0], pi[n, 1], pi[n, 2], pi[n, 3], pi[n, 4]
         if kind == 0:  # point: ρ_b = (x_b × e_i, e_i), ρ_a = −(x_a × e_i, e_i)
             f0, f1, f2 = lam[r0], lam[r0 + 1], lam[r0 + 2]
-            xb0, xb1, xb2 = _point(rot, com, b, pf[n, 3:6])
-            xa0, xa1, xa2 = _point(rot, com, a, pf[n, 0:3])
-            tb0, tb1, tb2 = xb1 * f2 - xb2 * f1, xb2 * f0 - xb0 * f2, xb0 * f1 - xb1 * f0
-            ta0, ta1, ta2 = xa1 * f2 - xa2 * f1, xa2 * f0 - xa0 * f2, xa0 * f1 - xa1 * f0
-            _add(cut, k, 1.0, tb0, tb1, tb2, f0, f1, f2)
-            if b >= 0:
-                _add(net, b, -1.0, tb0, tb1, tb2, f0, f1, f2)
-            if a >= 0:
-                _add(net, a, 1.0, ta0, ta1, ta2, f0, f1, f2)
-            continue
-        if kind == 1:  # perp: ρ_b = size (n × e, 0) = −ρ_a
+            xb0, xb1, xb2 = _point(rot, com, ref, b, pf[n, 3:6])
+            xa0, xa1, xa2 = _point(rot, com, ref, a, pf[n, 0:3])
+            fs[0, 0], fs[0, 1], fs[0, 2] = xb1 * f2 - xb2 * f1, xb2 * f0 - xb0 * f2, \
+                xb0 * f1 - xb1 * f0
+            fs[1, 0], fs[1, 1], fs[1, 2] = xa2 * f1 - xa1 * f2, xa0 * f2 - xa2 * f0, \
+                xa1 * f0 - xa0 * f1
+            fs[0, 3], fs[0, 4], fs[0, 5], fs[1, 3], fs[1, 4], fs[1, 5] = f0, f1, f2, -f0, -f1, \
+                -f2
+        elif kind == 1:  # perp: ρ_b = size (n × e, 0) = −ρ_a
             e0, e1, e2 = _turned(rot, a, pf[n, 6:9])
             d0, d1, d2 = _turned(rot, b, pf[n, 9:12])
             x = lam[r0] * size
-            t0, t1, t2 = x * (d1 * e2 - d2 * e1), x * (d2 * e0 - d0 * e2), x * (d0 * e1 - d1 * e0)
-            _add(cut, k, 1.0, t0, t1, t2, 0.0, 0.0, 0.0)
+            fs[0, 0], fs[0, 1], fs[0, 2] = x * (d1 * e2 - d2 * e1), x * (d2 * e0 - d0 * e2), \
+                x * (d0 * e1 - d1 * e0)
+            for c in range(3):
+                fs[0, 3 + c] = fs[1, 3 + c] = 0.0
+                fs[1, c] = -fs[0, c]
+        else:  # line, dist: `systems_loops.terms` made their ρ rows
+            for c in range(6):
+                fs[0, c], fs[1, c] = lam[r0] * rb[r0, c], lam[r0] * ra[r0, c]
+        for c in range(6):
+            cut[k, c] += fs[0, c]
             if b >= 0:
-                _add(net, b, -1.0, t0, t1, t2, 0.0, 0.0, 0.0)
+                net[b, c] -= fs[0, c]
             if a >= 0:
-                _add(net, a, 1.0, t0, t1, t2, 0.0, 0.0, 0.0)
-            continue
-        x = lam[r0]  # line, dist: `systems_loops.terms` made their ρ rows
-        _add(cut, k, x, rb[r0, 0], rb[r0, 1], rb[r0, 2], rb[r0, 3], rb[r0, 4], rb[r0, 5])
-        if b >= 0:
-            _add(net, b, -x, rb[r0, 0], rb[r0, 1], rb[r0, 2], rb[r0, 3], rb[r0, 4], rb[r0, 5])
-        if a >= 0:
-            _add(net, a, -x, ra[r0, 0], ra[r0, 1], ra[r0, 2], ra[r0, 3], ra[r0, 4], ra[r0, 5])
+                net[a, c] -= fs[1, c]
     for k in range(ct.shape[0]):  # a coupling's reaction drives its joints, as a motor would
         tau[ct[k, 2]] += lam[ct[k, 0]] * cv[k, 0]
     for k in range(ji.shape[0] - 1, -1, -1):  # each tree joint's child: its subtree's sum
@@ -221,8 +219,8 @@ def _reactions(pp, wp, own, u, row):
     o = BODY_COLUMNS * com.shape[0]
     for k in range(sj.shape[0]):
         n, o_k = sj[k, 0], o + JOINT_COLUMNS * k
-        x0, x1, x2 = _point(rot, com, sj[k, 1], sp[k])
-        row[o_k + 6], row[o_k + 7], row[o_k + 8] = x0, x1, x2
+        x0, x1, x2 = _point(rot, com, ref, sj[k, 1], sp[k])
+        row[o_k + 6], row[o_k + 7], row[o_k + 8] = x0 + ref[0], x1 + ref[1], x2 + ref[2]
         if n < 0:  # a cut joint: its constraint force only, at its point on b
             f = cut[k]
             n0, n1, n2, f0, f1, f2 = f[0], f[1], f[2], f[3], f[4], f[5]
@@ -259,9 +257,9 @@ def _reactions(pp, wp, own, u, row):
 
 
 @array_inner
-def _energy(pp, wp, q):
+def _energy(pp, wp, q, ref):
     """J: kinetic + gravity + the springs' (bodies', tree and cut joints'), as `System.energy`
-    (after `kinematics`)."""
+    (after `kinematics`, whose positions are from ``ref``)."""
     ji, bweight, si, sf, li, lf = at(pp, 1), at(pp, 11), at(pp, 16), at(pp, 17), at(pp, 18), \
         at(pp, 19)
     rot, com, vel, inert = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 4)
@@ -272,10 +270,11 @@ def _energy(pp, wp, q):
         e += 0.5 * (v[0] * f[0] + v[1] * f[1] + v[2] * f[2] + v[3] * f[3] + v[4] * f[4]
                     + v[5] * f[5])
     for i in range(com.shape[0]):
-        e -= bweight[i, 0] * com[i, 0] + bweight[i, 1] * com[i, 1] + bweight[i, 2] * com[i, 2]
+        e -= bweight[i, 0] * (com[i, 0] + ref[0]) + bweight[i, 1] * (com[i, 1] + ref[1]) \
+            + bweight[i, 2] * (com[i, 2] + ref[2])
     for n in range(si.shape[0]):
-        xa0, xa1, xa2 = _point(rot, com, si[n, 0], sf[n, 0:3])
-        xb0, xb1, xb2 = _point(rot, com, si[n, 1], sf[n, 3:6])
+        xa0, xa1, xa2 = _point(rot, com, ref, si[n, 0], sf[n, 0:3])
+        xb0, xb1, xb2 = _point(rot, com, ref, si[n, 1], sf[n, 3:6])
         d2 = (xb0 - xa0) ** 2 + (xb1 - xa1) ** 2 + (xb2 - xa2) ** 2
         k, rest = sf[n, 6], sf[n, 7]
         e += 0.5 * k * (math.sqrt(d2) - rest) ** 2 if rest != 0.0 else 0.5 * k * d2
@@ -286,13 +285,13 @@ def _energy(pp, wp, q):
     ci, cf = at(pp, 21), at(pp, 22)
     for n in range(ci.shape[0]):
         if cf[n, 15] != 0.0:
-            e += 0.5 * cf[n, 15] * _cut_stretch(rot, com, ci[n, 0], ci[n, 1], ci[n, 2],
+            e += 0.5 * cf[n, 15] * _cut_stretch(rot, com, ref, ci[n, 0], ci[n, 1], ci[n, 2],
                                                 cf[n]) ** 2
     return e
 
 
 @inlined
-def _cut_stretch(rot, com, kind, a, b, cf):
+def _cut_stretch(rot, com, ref, kind, a, b, cf):
     """A loaded cut joint's coordinate − rest (`cutjoint.stretch`: a revolute's turn within
     [−π, π)), measured from its bodies' poses as `systems_loads` does for its load."""
     e0, e1, e2 = _turned(rot, a, cf[0:3])
@@ -307,6 +306,6 @@ def _cut_stretch(rot, com, kind, a, b, cf):
                           + (a0 * b1 - a1 * b0) * e2, a0 * b0 + a1 * b1 + a2 * b2)
         d = turn - cf[16]
         return d - 2.0 * math.pi * math.floor(d / (2.0 * math.pi) + 0.5)
-    xa0, xa1, xa2 = _point(rot, com, a, cf[9:12])
-    xb0, xb1, xb2 = _point(rot, com, b, cf[12:15])
+    xa0, xa1, xa2 = _point(rot, com, ref, a, cf[9:12])
+    xb0, xb1, xb2 = _point(rot, com, ref, b, cf[12:15])
     return -cf[16] + (xb0 - xa0) * e0 + (xb1 - xa1) * e1 + (xb2 - xa2) * e2
