@@ -34,7 +34,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 COMPILE_SECONDS = {"rk4": 2.0, "dop853": 3.0, "implicit": 8.0, "midpoint": 5.0,
-                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0, "systems": 120.0}
+                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0, "systems": 130.0}
 """About how long (s, one idle core) compiling each method's kernels takes from an empty cache,
 from benchmarks/bench_first_run.py; only for the notice's estimate. The three splitting methods
 share one kernel."""

@@ -1,16 +1,19 @@
 """The one compiled entry of a system's run: `run_segment`, one call per segment, with any of
-the systems' methods (DOP853, `systems_dop853`; rk4, midpoint, implicit, `systems_fixed`).
+the systems' methods (DOP853, `systems_dop853`; rk4, midpoint, implicit, `systems_fixed`), and
+one call for all the samples' outputs (`systems_outputs`).
 
 One kernel, not one per method: every method calls the same right-hand side and projection,
 which numba compiles (~1 min) into each kernel that calls them; a single entry compiles them
-once, for the wheel's prebuilt kernels and for a machine without them alike.
+once, for the wheel's prebuilt kernels and for a machine without them alike. The outputs use the
+same accelerations, kinematics and loads: as a method code of this entry they cost only their
+own code to compile.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from massprops.dynamics.compiled import systems_dop853, systems_fixed
+from massprops.dynamics.compiled import systems_dop853, systems_fixed, systems_outputs
 from massprops.dynamics.compiled.jit import array_kernel
 from massprops.dynamics.compiled.systems_step import OK, rhs, workspace
 from massprops.dynamics.compiled.unowned import unowned
@@ -24,9 +27,12 @@ METHODS = {"dop853": DOP853, **systems_fixed.METHODS}
 
 @array_kernel
 def run_segment(prog, y, t0, t1, setting, method, scales, t_out, y_out, istats, fstats, acc_b,
-                acc_u, max_steps, yfail):
+                acc_u, max_steps, yfail, out):
     """Integrate y (in place) from t0 to t1 with ``method`` (a METHODS code) at ``setting``
     (DOP853: rtol; the others: the step h, s); samples at t_out[istats[4]:] into y_out.
+    With a `systems_outputs` code (STATES, ENERGIES, OUTPUTS) instead: no step, each sample
+    y_out[s] at t_out[s] evaluated into out[s] (its layout there; a failure in istats); the
+    other arguments are unread.
 
     prog: the system program (`dynamics.systems.program`); scales (n,): each component's error
     scale floor, grown to its running max |y_i| here; istats, fstats, acc_b, acc_u, yfail: see
@@ -34,6 +40,10 @@ def run_segment(prog, y, t0, t1, setting, method, scales, t_out, y_out, istats, 
     take views numba does not reference-count (`unowned`) and, last, the owned arrays: an
     argument stays alive until the call returns."""
     ws = workspace(prog)
+    if method >= systems_outputs.STATES:
+        systems_outputs.evaluate(prog, ws, systems_outputs.scratch(prog), t_out, y_out, out,
+                                 istats, method)
+        return
     arrays = (y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail)
     if method == DOP853:
         own = systems_dop853.scratch(y.size)
@@ -54,12 +64,13 @@ def stand_in() -> tuple:
             np.array([[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]]), np.zeros((1, 3)),
             np.array([[0.0, 0.0, 0.5]]), np.eye(3).reshape(1, 3, 3), np.zeros(1, ints),
             np.ones(1), np.eye(3).reshape(1, 3, 3), np.eye(3).reshape(1, 3, 3),
-            np.array([[0.0, 0.0, -0.5]]), np.array([[0.0, 0.0, -9.81]]), np.zeros((0, 4), ints),
+            np.array([[0.0, 0.0, -0.5]]), np.array([[0.0, 0.0, -9.81]]), np.zeros((0, 5), ints),
             np.zeros((0, 13)), np.zeros((0, 4), ints), np.zeros((0, 8)), np.zeros((0, 2), ints),
             np.zeros((0, 9)), np.zeros(0, ints), np.zeros((0, 6)),
             np.array([1.0, 1e-8, 1e-14, 1e-6]), np.zeros((0, 3), ints), np.zeros((0, 21)),
             np.zeros((0, 3), ints), np.zeros((0, 2)),
-            np.array([[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]]), np.eye(3).reshape(1, 3, 3))
+            np.array([[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]]), np.eye(3).reshape(1, 3, 3),
+            np.zeros((1, 2), ints), np.array([[0.0, 0.0, 0.5]]))
 
 
 def warm_up() -> None:
@@ -70,4 +81,4 @@ def warm_up() -> None:
     run_segment(prog, y, 0.0, 1e-3, 1e-6, DOP853, np.ones(2), np.array([0.0, 1e-3]),
                 np.zeros((2, 2)), np.array([0, 0, 0, OK, 1, -1, -1], np.int64),
                 np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]), np.zeros((0, 1)),
-                np.zeros((0, 1)), 1000, np.zeros(2))
+                np.zeros((0, 1)), 1000, np.zeros(2), np.zeros((0, 0)))

@@ -63,6 +63,9 @@ counts, never by timers, so results do not depend on the machine. A call stopped
 from its last accepted state: DOP853 with a fresh first step (two evaluations per call), the
 fixed-step methods on the same grid."""
 
+NO_OUT = np.zeros((0, 0))
+"""`run_segment`'s outputs array, unread by a step loop (`outputs` evaluates samples)."""
+
 
 class Run:
     """Samples ``y_out`` (n_out, ny) at ``t_out``, steps, evaluations, rejected steps, the
@@ -131,7 +134,7 @@ def _segments(system, y, edges, setting, method, scales, floors, t_out, run, ist
         while True:
             bound = min(max_steps, int(istats[0] + istats[2]) + CALL_STEPS)
             run_segment(system.program, y, start, t1, h, METHODS[method], within, t_out,
-                        run.y_out, istats, fstats, accepted_b, accepted_u, bound, yfail)
+                        run.y_out, istats, fstats, accepted_b, accepted_u, bound, yfail, NO_OUT)
             if istats[3] != codes.STEP_LIMIT or bound >= max_steps:
                 break
             istats[3] = codes.OK  # this call's share, not the run bound: go on from there
@@ -184,7 +187,7 @@ def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales:
         for a, b in zip(edges[:-1], edges[1:]):
             run_segment(system.program, trial, float(a), float(b), min(float(rtol), NARROW_RTOL),
                         DOP853, scales_k.copy(), np.empty(0), np.empty((0, n)), istats, fstats,
-                        accepted_b, accepted_u, NARROW_STEPS, np.zeros(n))
+                        accepted_b, accepted_u, NARROW_STEPS, np.zeros(n), NO_OUT)
             if istats[3] != codes.OK:
                 break
         if istats[3] != codes.CROSSED:

@@ -8,6 +8,10 @@ applied load (spring, damper, drive along its axis) and a coupling's generalised
 body is Σ λ ρ_b: its constraint force only, as for a tree joint, since a loaded cut joint's
 spring, damper and drive are applied loads on its two bodies (`cutjoint`, in ``fext``). All are
 reported on the scene joint's second body at the joint's point, world frame.
+
+`evaluate` computes them for all samples in one compiled call (`compiled.systems_outputs`, ~µs a
+sample); `reference` is the same in numpy, sample by sample from `System.solve` (~1 ms a sample
+on one body), kept as the compiled form's independent reference in the tests.
 """
 
 from __future__ import annotations
@@ -16,9 +20,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from massprops.dynamics.compiled.systems_kernel import run_segment
+from massprops.dynamics.compiled.systems_loops import OK
+from massprops.dynamics.compiled.systems_outputs import ENERGIES, OUTPUTS, STATES
 from massprops.dynamics.systems import cutjoint
 from massprops.dynamics.systems import tree as tr
 from massprops.dynamics.systems.model import WORLD
+from massprops.errors import ComputationError
 from massprops.rotation import canonical, matrix_to_quat, rotation_angle_between
 
 
@@ -27,7 +35,8 @@ class Samples:
     """t (n,); per body (name order of the scene) position, orientation [w,x,y,z] body -> world,
     velocity, angular_velocity (n, b, 3|4) world; per scene joint: coordinates and rates
     (lists of (n, k) arrays), force and torque (n, J, 3) on the second body at the joint's
-    point, world; energy (n,) J or None; joint_points (n, J, 3) world."""
+    point, world; energy (n,) J or None; joint_points (n, J, 3) world; residual (n, 2) the
+    constraints' largest position (m) and velocity (m/s) residuals (zeros without loops)."""
 
     t: np.ndarray
     position: np.ndarray
@@ -40,27 +49,175 @@ class Samples:
     torque: np.ndarray
     energy: np.ndarray | None
     joint_points: np.ndarray | None = None  # (n, J, 3) each joint's point on its second body
-
-
-def body_states(system, y: np.ndarray):
-    """(position, orientation, velocity, angular velocity) of every body at the states ``y``
-    (n, nq + nv): kinematics only, no accelerations or reactions (for comparing runs)."""
-    tree = system.tree
-    n, nb = len(y), len(tree.bodies)
-    pos, quat = np.empty((n, nb, 3)), np.empty((n, nb, 4))
-    vel, omega = np.empty((n, nb, 3)), np.empty((n, nb, 3))
-    for s in range(n):
-        kin = tr.kinematics(tree, y[s, :system.nq], y[s, system.nq:])
-        pos[s], vel[s] = kin.com + kin.ref, kin.V[:, 3:] + np.cross(kin.V[:, :3], kin.com)
-        omega[s] = kin.V[:, :3]
-        quat[s] = canonical(matrix_to_quat(kin.rotation))
-    return pos + system.origin, quat, vel, omega
+    residual: np.ndarray | None = None  # (n, 2) the loops' largest |Φ| m and |Φ̇| m/s
 
 
 def evaluate(system, t: np.ndarray, y: np.ndarray,
              energy: np.ndarray | None = None) -> Samples:
     """Samples of the states ``y`` (n, nq + nv) at times ``t``; ``energy`` (n,) J their
-    energies where the caller has them (`System.energy`), else the samples carry none."""
+    energies where the caller has them (`energies`), else the samples carry none. Bodies,
+    reactions and points in one compiled call for all samples (`compiled.systems_outputs`);
+    the tree joints' coordinates and rates are slices of y; only the cut joints' coordinates
+    are measured sample by sample (`cutjoint.from_poses`). `reference` is the numpy form."""
+    scene, tree = system.scene, system.tree
+    t = np.ascontiguousarray(t, dtype=float)
+    y = np.ascontiguousarray(np.reshape(y, (len(t), system.nq + system.nv)), dtype=float)
+    n, nb, nj = len(t), len(tree.bodies), len(scene.joints)
+    table = _compiled(system, t, y, OUTPUTS, 18 * nb + 9 * nj + 2)
+    com, rotation, motion = _bodies(table, n, nb)
+    joints = table[:, 18 * nb:18 * nb + 9 * nj].reshape(n, nj, 9)
+    # the cut joints' measurement takes V = (ω, v_O) about the system frame's origin
+    spatial = np.concatenate([motion[..., :3], motion[..., 3:] - np.cross(motion[..., :3], com)],
+                             axis=-1)
+    coords, rates = _joint_states(system, y, rotation, com, spatial)
+    samples = Samples(t, com + system.origin, _quaternions(rotation),
+                      motion[..., 3:].copy(), motion[..., :3].copy(),
+                      coords, rates, joints[..., 0:3].copy(), joints[..., 3:6].copy(), energy,
+                      joints[..., 6:9] + system.origin, table[:, -2:].copy())
+    return _in_world(system, samples)
+
+
+def energies(system, y: np.ndarray) -> np.ndarray:
+    """(n,) J: `System.energy` of each state ``y`` (n, nq + nv) (kinematics only: also of a
+    state where the accelerations cannot be solved, e.g. a diverged run's), in one compiled
+    call."""
+    y = np.ascontiguousarray(np.reshape(y, (-1, system.nq + system.nv)), dtype=float)
+    return _compiled(system, np.zeros(len(y)), y, ENERGIES, 1)[:, 0]
+
+
+def body_states(system, y: np.ndarray):
+    """(position, orientation, velocity, angular velocity) of every body at the states ``y``
+    (n, nq + nv): kinematics only, no accelerations or reactions (for comparing runs)."""
+    y = np.ascontiguousarray(np.reshape(y, (-1, system.nq + system.nv)), dtype=float)
+    n, nb = len(y), len(system.tree.bodies)
+    com, rotation, motion = _bodies(_compiled(system, np.zeros(n), y, STATES, 18 * nb), n, nb)
+    return com + system.origin, _quaternions(rotation), motion[..., 3:].copy(), \
+        motion[..., :3].copy()
+
+
+def _compiled(system, t: np.ndarray, y: np.ndarray, mode: int, width: int) -> np.ndarray:
+    """The compiled outputs' table (n, width) of the states y at t (`systems_outputs`)."""
+    out = np.empty((len(t), width))
+    if not len(t):
+        return out
+    istats = np.array([0, 0, 0, OK, 0, -1, -1], dtype=np.int64)
+    run_segment(system.program, np.zeros(0), 0.0, 0.0, 0.0, mode, np.zeros(0), t, y, istats,
+                np.zeros(7), np.zeros((0, 0)), np.zeros((0, 0)), 0, np.zeros(0), out)
+    if istats[3] != OK:  # M is positive definite at any finite state of a valid scene
+        at = float(t[istats[4]])
+        raise ComputationError(f"{system.scene.source}: the outputs at t = {at:.6g} s cannot "
+                               "be evaluated: the mass matrix is not positive definite there "
+                               "(the state went wild)")
+    return out
+
+
+def _bodies(table: np.ndarray, n: int, nb: int):
+    """(com (n, b, 3) m, rotation (n, b, 3, 3), (ω, v_com) (n, b, 6)) of the table's body
+    columns (`systems_outputs._bodies`)."""
+    bodies = table[:, :18 * nb].reshape(n, nb, 18)
+    return bodies[..., 0:3], bodies[..., 3:12].reshape(n, nb, 3, 3), bodies[..., 12:18]
+
+
+def _quaternions(rotation: np.ndarray) -> np.ndarray:
+    """[w, x, y, z] (..., 4) of rotations (..., 3, 3), canonical (w ≥ 0), all at once."""
+    if rotation.size == 0:
+        return np.zeros(rotation.shape[:-2] + (4,))
+    return matrix_to_quat(rotation)
+
+
+def _joint_states(system, y: np.ndarray, rotation: np.ndarray, com: np.ndarray,
+                  motion: np.ndarray) -> tuple[list, list]:
+    """Per scene joint (coordinates, rates) (n, k) at the states ``y`` (n, nq + nv), in the
+    contract's signs (`_joint_state`): a tree joint's are slices of y, a cut joint's are
+    measured from the bodies' poses (rotation, com, V = motion of the compiled outputs)."""
+    scene, tree, nq = system.scene, system.tree, system.nq
+    coords, rates = [], []
+    n = len(y)
+    for k, sj in enumerate(scene.joints):
+        where, idx = tree.of_scene[k]
+        if sj.kind in ("fixed", "distance"):
+            c, r = np.zeros((n, 0)), np.zeros((n, 0))
+        elif where == "tree":
+            j = tree.joints[idx]
+            qj, uj = y[:, j.iq:j.iq + j.nq], y[:, nq + j.iu:nq + j.iu + j.nv]
+            if j.kind == "spherical" and j.reversed:
+                c, r = qj * np.array([1.0, -1.0, -1.0, -1.0]), -uj
+            elif j.kind == "spherical":  # `tree.joint_rates`, all samples at once
+                c, r = qj.copy(), np.einsum("nij,nj->ni", _quat_matrices(qj), uj)
+            elif not j.reversed:
+                c, r = qj.copy(), uj.copy()
+            elif j.kind == "universal":
+                c, r = -qj[:, ::-1], -uj[:, ::-1]
+            else:
+                c, r = -qj, -uj
+        elif sj.kind in ("revolute", "prismatic", "cylindrical"):
+            c, r = _cut_state(tree, sj, rotation, com, motion)
+        else:  # a cut ball or universal joint, sample by sample
+            c, r = np.zeros((n, _ncoord(sj.kind))), np.zeros((n, _nrate(sj.kind)))
+            for s in range(n):
+                kin = tr.Kinematics(rotation[s], com[s], motion[s], None, None, [], [])
+                c[s], r[s] = cutjoint.from_poses(tree, kin, sj)
+        if where == "cut" and sj.kind in ("revolute", "cylindrical", "universal"):
+            for col in ([0] if sj.kind != "universal" else [0, 1]):  # measured: continuous
+                c[:, col] = np.unwrap(c[:, col])
+        coords.append(c)
+        rates.append(r)
+    return coords, rates
+
+
+def _cut_state(tree, sj, rotation: np.ndarray, com: np.ndarray, motion: np.ndarray):
+    """`cutjoint.from_poses` of a cut revolute, prismatic or cylindrical joint ``sj`` at all
+    samples at once (rotation (n, b, 3, 3), com (n, b, 3), V = motion (n, b, 6))."""
+    n = len(rotation)
+
+    def side(body):  # (E = R R0ᵀ, ω, v_O, the joint's point) of one side, (n, ...)
+        if body == WORLD:
+            z = np.zeros((n, 3))
+            return np.broadcast_to(tr.EYE3, (n, 3, 3)), z, z, np.broadcast_to(sj.point, (n, 3))
+        b = tree.bodies[body]
+        r = rotation[:, body]
+        local = b.rotation0.T @ (sj.point - b.com0)
+        return (r @ b.rotation0.T, motion[:, body, :3], motion[:, body, 3:],
+                com[:, body] + r @ local)
+
+    (ea, wa, va, xa), (eb, wb, vb, xb) = side(sj.a), side(sj.b)
+    axis = sj.axes[0]
+    normal = cutjoint.perp(axis)
+    rel = np.einsum("nji,njk->nik", ea, eb)  # E_aᵀ E_b
+    w_rel = np.einsum("nji,nj->ni", ea, wb - wa)
+    start = normal - (normal @ axis) * axis
+    end = rel @ normal
+    end = end - (end @ axis)[:, None] * axis
+    turn = np.arctan2(np.cross(start, end) @ axis, end @ start)
+    e = ea @ axis
+    d = xb - xa
+    shift = np.einsum("ni,ni->n", d, e)
+    rate = np.einsum("ni,ni->n", vb + np.cross(wb, xb) - va - np.cross(wa, xa), e) \
+        + np.einsum("ni,ni->n", d, np.cross(wa, e))
+    spin = w_rel @ axis
+    if sj.kind == "revolute":
+        return turn[:, None], spin[:, None]
+    if sj.kind == "prismatic":
+        return shift[:, None], rate[:, None]
+    return np.stack([turn, shift], -1), np.stack([spin, rate], -1)
+
+
+def _quat_matrices(q: np.ndarray) -> np.ndarray:
+    """(n, 3, 3): `tree.quat_matrix` of each quaternion q (n, 4), the same numbers."""
+    w, x, y, z = (q / np.sqrt(np.einsum("ni,ni->n", q, q))[:, None]).T
+    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z),
+                               2 * (x * z + w * y)], -1),
+                     np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z),
+                               2 * (y * z - w * x)], -1),
+                     np.stack([2 * (x * z - w * y), 2 * (y * z + w * x),
+                               1 - 2 * (x * x + y * y)], -1)], -2)
+
+
+def reference(system, t: np.ndarray, y: np.ndarray,
+              energy: np.ndarray | None = None) -> Samples:
+    """`evaluate` in numpy, sample by sample from `System.solve`: the independent reference of
+    the compiled outputs (tests), and a single sample's outputs without the compiled kernel
+    (a duration-0 run)."""
     scene, tree = system.scene, system.tree
     n, nb, nj = len(t), len(tree.bodies), len(scene.joints)
     pos, quat = np.empty((n, nb, 3)), np.empty((n, nb, 4))
@@ -88,8 +245,9 @@ def evaluate(system, t: np.ndarray, y: np.ndarray,
                 coords[k][:, col] = np.unwrap(coords[k][:, col])
     pos += system.origin  # back from the assembly's middle (assemble.localized)
     points += system.origin
+    residual = np.array([system.residual(row) for row in y]).reshape(n, 2)
     return _in_world(system, Samples(t, pos, quat, vel, omega, coords, rates, force, torque,
-                                     energy, points))
+                                     energy, points, residual))
 
 
 def _in_world(system, samples: Samples) -> Samples:

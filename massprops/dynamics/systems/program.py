@@ -9,7 +9,8 @@ A tuple of C-contiguous arrays, int64 or float64, in this order (the kernels ind
  5 rot_parent0 (nj, 3, 3); 6 parent_joint (n,) body -> its tree joint;
  7 mass (n,); 8 inertia (n, 3, 3) body axes; 9 rotation0 (n, 3, 3); 10 com0 (n, 3);
  11 weight (n, 3) m g, N;
- 12 primitives (np, 4) int [kind (PRIM), a, b, first row]; 13 (np, 13) [pa, pb, ea, nb, length];
+ 12 primitives (np, 5) int [kind (PRIM), a, b, first row, the scene joint it belongs to];
+   13 (np, 13) [pa, pb, ea, nb, length];
  14 forces (nf, 4) int [0 force / 1 torque / 2 drag, body, body frame, at a point];
  15 (nf, 8) [vector, point in the body frame, start, end]; a drag's [linear, angular, 0, ...,
    -inf, inf];
@@ -26,7 +27,10 @@ A tuple of C-contiguous arrays, int64 or float64, in this order (the kernels ind
    coupling's first term, else 0] (`loops.Coupling`: Φ_row = Σ scale c q[iq] − scale constant);
  25 axes in the parent's frame (nj, 2, 3), R_p0ᵀ a; 26 (nj, 3, 3) R_p0ᵀ R_c0, R_c0 the child's
    rotation0: a joint turning by Rot(a, q) in its frame gives the child
-   R_parent Rot(R_p0ᵀ a, q) R_p0ᵀ R_c0, one 3 × 3 product fewer than through the joint frame.
+   R_parent Rot(R_p0ᵀ a, q) R_p0ᵀ R_c0, one 3 × 3 product fewer than through the joint frame;
+ 27 scene joints (J, 2) int [its tree joint (-1: a cut joint), its second body b]; 28 (J, 3)
+   its point (the second point of a distance joint) fixed in b, b's frame (world for the
+   world): what the outputs report per scene joint (`compiled.systems_outputs`).
 Frames and meanings as in `tree`, `loops` and `System` (the numpy objects these mirror).
 """
 
@@ -61,11 +65,11 @@ def build_program(system) -> tuple:
     parent_joint = np.full(n, -1, np.int64)
     for body, k in tree.parent_joint.items():
         parent_joint[body] = k
-    pi = np.zeros((len(tree.prims), 4), np.int64)
+    pi = np.zeros((len(tree.prims), 5), np.int64)
     pf = np.zeros((len(tree.prims), 13))
     row = 0
     for k, p in enumerate(tree.prims):
-        pi[k] = [PRIM[p.kind], p.a, p.b, row]
+        pi[k] = [PRIM[p.kind], p.a, p.b, row, tree.cut[p.joint]]
         pf[k] = [*p.pa, *p.pb, *p.ea, *p.nb, p.length]
         row += p.rows
     nf = len(scene.forces)
@@ -99,7 +103,8 @@ def build_program(system) -> tuple:
                      tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size,
                      tolerances.NEAR_SINGULAR_MARGIN]), ci, cf, *_couplings(tree, row),
            np.einsum("kji,kaj->kai", rp0, axes),  # R_p0ᵀ a: the axes in the parent's frame
-           np.einsum("kji,kjl->kil", rp0, rot0[ji[:, 2]]))  # R_p0ᵀ R_c0
+           np.einsum("kji,kjl->kil", rp0, rot0[ji[:, 2]]),  # R_p0ᵀ R_c0
+           *_scene_joints(scene, tree))
     return tuple(np.ascontiguousarray(a) for a in out)
 
 
@@ -111,6 +116,19 @@ def _couplings(tree, first: int) -> tuple[np.ndarray, np.ndarray]:
             ti.append([first + r, iq, iu])
             tf.append([c.scale * coef, c.scale * c.constant if k == 0 else 0.0])
     return np.array(ti, np.int64).reshape(-1, 3), np.array(tf, float).reshape(-1, 2)
+
+
+def _scene_joints(scene, tree) -> tuple[np.ndarray, np.ndarray]:
+    """Program entries 27 and 28: each scene joint's tree joint, second body and point."""
+    ji = np.zeros((len(scene.joints), 2), np.int64)
+    jp = np.zeros((len(scene.joints), 3))
+    for k, j in enumerate(scene.joints):
+        where, n = tree.of_scene[k]
+        point = np.asarray(j.points[1] if j.kind == "distance" else j.point, float)
+        ji[k] = [n if where == "tree" else -1, j.b]
+        jp[k] = point if j.b == WORLD else tree.bodies[j.b].rotation0.T @ (
+            point - tree.bodies[j.b].com0)
+    return ji, jp
 
 
 def _cut_loads(scene, tree) -> tuple[np.ndarray, np.ndarray]:

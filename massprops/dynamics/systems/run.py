@@ -28,7 +28,7 @@ from massprops.dynamics.systems.methods import (
     start_companions,
 )
 from massprops.dynamics.systems.model import SystemScene
-from massprops.dynamics.systems.outputs import Samples, evaluate
+from massprops.dynamics.systems.outputs import Samples, energies, evaluate, reference
 from massprops.dynamics.systems.system import System
 from massprops.errors import (
     ComputationError,
@@ -215,11 +215,11 @@ def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, star
     energy = None
     if system.cannot_gain_energy():
         with np.errstate(all="ignore"):  # a diverged run's energy may overflow: said below
-            energy = np.array([system.energy(row) for row in run.y_out])
+            energy = energies(system, run.y_out)
         _check_energy(system, t_out, energy, name)
     conservative = system.conservative()
     samples = evaluate(system, t_out, run.y_out, energy if conservative else None)
-    residual = np.array([system.residual(row) for row in run.y_out])
+    residual = samples.residual
     diagnostics = {
         "energy_rel_drift": None, "error_estimate": None,
         "constraint_residual": {"position": float(residual[:, 0].max()),
@@ -305,8 +305,9 @@ def _holding(system: System, y: np.ndarray, notes: list[str]) -> list | None:
 
 
 def _static(system: System, y0: np.ndarray, notes: list[str]) -> SystemResult:
-    """Duration 0: the start state's outputs and reactions, no integration."""
-    samples = evaluate(system, np.zeros(1), y0[None, :])
+    """Duration 0: the start state's outputs and reactions, no integration (one sample: the
+    numpy outputs, without loading the compiled kernel)."""
+    samples = reference(system, np.zeros(1), y0[None, :])
     pos, vel = system.residual(y0)
     diagnostics = {"energy_rel_drift": None, "error_estimate": None,
                    "constraint_residual": {"position": pos, "velocity": vel},
