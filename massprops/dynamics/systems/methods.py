@@ -164,7 +164,7 @@ def start_companions(system: System, y0: np.ndarray, t_out: np.ndarray, name: st
 def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
                    setting: float, floors: np.ndarray, windows: np.ndarray, samples: Samples,
                    limit: int, steps: int, side: Companions | None = None,
-                   progress=None) -> float | None:
+                   progress=None, short_err: float = 0.0) -> float | None:
     """The run's global error estimate from its companion runs (`accuracy.companion_settings`
     and `global_estimate`, in the systems' metric `outputs.distance`), and for a stiff method
     at a step that does not resolve the fastest rate at least
@@ -175,7 +175,10 @@ def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
     18-fold at h = 20 ms. ``limit``: the probe's run bound; ``steps``: the main run's (its
     companions are bounded at COMPANION_GROWTH times as many); ``side``: the companions
     started beside the main run (`start_companions`; None: started here);
-    ``progress(fraction)`` moved meanwhile, from ½ to 1."""
+    ``progress(fraction)`` moved meanwhile, from ½ to 1; ``short_err``: the main run's error on
+    its segments of one or two steps, which the companions cannot see (`integrate.Run`), added
+    in the metric's units as one body's is: its component unknown, divided by the smallest
+    scale (an angle's error of a quaternion component δ is about 2δ)."""
     # deferred: the registry imports the one-body kernels' modules (their orders only here)
     from massprops.dynamics.integrators import INTEGRATORS
 
@@ -198,6 +201,8 @@ def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
     if credit is not None and setting * fastest_rate(system, y0) < 1.0:
         credit = spec.order
     estimate = global_estimate(spec.kind, spec.order, d_run, d_companions, credit)
+    duration = float(t_out[-1])
+    estimate += short_err * max(2.0, 1.0 / size, duration / size, duration)
     if spec.stiff:  # a fast mode all three runs damp or alias alike: measured apart
         probe = unresolved_mode_error(system, y0, name, setting, floors, windows, t_out,
                                       samples, limit)

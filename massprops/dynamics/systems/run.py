@@ -246,7 +246,7 @@ def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, star
         try:
             diagnostics["error_estimate"] = error_estimate(
                 system, y0, t_out, name, setting, floors, _windows(scene), samples, 2 * limit,
-                run.steps, side, progress)
+                run.steps, side, progress, run.short_err)
         except KeyboardInterrupt:  # Ctrl-C while the companions ran: the run itself stands
             if not interruptible:
                 raise
