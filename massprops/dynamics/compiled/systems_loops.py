@@ -53,8 +53,7 @@ def _point_motion(rot, com, vel, acc, ref, body, local):
     return x0, x1, x2, v0, v1, v2, a0, a1, a2
 
 
-@inlined
-def _turned(rot, body, local):
+def turned(rot, body, local):
     """R_body local (the world: local) as three floats."""
     if body < 0:
         return local[0], local[1], local[2]
@@ -62,6 +61,11 @@ def _turned(rot, body, local):
     return (r[0, 0] * local[0] + r[0, 1] * local[1] + r[0, 2] * local[2],
             r[1, 0] * local[0] + r[1, 1] * local[1] + r[1, 2] * local[2],
             r[2, 0] * local[0] + r[2, 1] * local[1] + r[2, 2] * local[2])
+
+
+_turned = inlined(turned)
+"""`turned` copied into the step loop's callers (their hot loops); the outputs call it
+(`systems_outputs`: seven call sites, compiled once)."""
 
 
 @inlined

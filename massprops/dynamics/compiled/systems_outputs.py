@@ -26,7 +26,7 @@ import numpy as np
 
 from massprops.dynamics.compiled.jit import array_inner, inlined
 from massprops.dynamics.compiled.systems_linalg import lower_solve
-from massprops.dynamics.compiled.systems_loops import OK, accelerations, decompose
+from massprops.dynamics.compiled.systems_loops import OK, accelerations, decompose, turned
 from massprops.dynamics.compiled.systems_mass import _net
 from massprops.dynamics.compiled.systems_tree import (
     PRISMATIC,
@@ -101,6 +101,10 @@ def _bodies(wp, row, ref):
         row[o + 17] = vel[i, 5] + (w0 * com[i, 1] - w1 * com[i, 0])
 
 
+_turned = array_inner(turned)
+"""`systems_loops.turned`, called (not inlined) at the outputs' seven call sites."""
+
+
 @array_inner
 def _point(rot, com, ref, body, local):
     """The point of ``body`` at ``local`` (its frame; the world's: world) as three floats,
@@ -114,17 +118,6 @@ def _point(rot, com, ref, body, local):
     return (com[body, 0] + r[0, 0] * local[0] + r[0, 1] * local[1] + r[0, 2] * local[2],
             com[body, 1] + r[1, 0] * local[0] + r[1, 1] * local[1] + r[1, 2] * local[2],
             com[body, 2] + r[2, 0] * local[0] + r[2, 1] * local[1] + r[2, 2] * local[2])
-
-
-@array_inner
-def _turned(rot, body, local):
-    """R_body local (the world's: local) as three floats."""
-    if body < 0:
-        return local[0], local[1], local[2]
-    r = rot[body]
-    return (r[0, 0] * local[0] + r[0, 1] * local[1] + r[0, 2] * local[2],
-            r[1, 0] * local[0] + r[1, 1] * local[1] + r[1, 2] * local[2],
-            r[2, 0] * local[0] + r[2, 1] * local[1] + r[2, 2] * local[2])
 
 
 @array_inner
