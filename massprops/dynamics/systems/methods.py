@@ -107,11 +107,9 @@ class Companions:
     def __init__(self, system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
                  settings: tuple, floors: np.ndarray, windows: np.ndarray, limit: int) -> None:
         self.cap: int | None = None
-        self.capped = False
 
         def watch(steps: int) -> None:
             if self.cap is not None and steps > self.cap:
-                self.capped = True
                 raise KeyboardInterrupt  # integrate ends the run there (interrupted)
 
         def runs(report) -> list:
@@ -133,10 +131,10 @@ class Companions:
     def stop(self) -> None:
         self.job.stop()
 
-    def result(self, steps: int, poll) -> list | None:
+    def result(self, steps: int, poll) -> list:
         """The runs, each None where it stopped at the cap or failed, once the main run took
-        ``steps``; None on Ctrl-C while waiting. A run that already went past the cap is
-        judged by it too: the outcome is the one of running them afterwards."""
+        ``steps`` (Ctrl-C while waiting stops them and propagates). A run that already went
+        past the cap is judged by it too: the outcome is the one of running them afterwards."""
         self.cap = COMPANION_GROWTH * max(steps, 1000)
         try:
             runs = self.job.result(poll)
