@@ -338,3 +338,24 @@ def test_translation_of_the_body_and_its_start():
     assert np.allclose(joint.axes[0], turned, rtol=0, atol=1e-15)
     assert hinge.initial.rates == {"j0": pytest.approx((1.5 * math.sqrt(2),), rel=1e-14)}
     assert hinge.initial.velocities == {}
+
+
+def test_every_kind_of_force_and_joint_has_a_translation():
+    """`as_system` translates each force and joint kind a one-body scene can name; its last
+    branch takes the last kind (drag, revolute). A kind added to the scene must be translated
+    there, and listed here."""
+    from massprops.dynamics.joints.scene import JOINT_TYPES
+    from massprops.dynamics.scene import FORCE_TYPES
+
+    assert set(FORCE_TYPES) == {"gravity", "force", "torque", "spring", "drag"}
+    assert set(JOINT_TYPES) == {"spherical", "revolute"}
+    text = LOADED_MESH.replace("time:", "  - {type: drag, linear: 0.3, angular: 0.1}\ntime:")
+    system = as_system(_scene(text, 1.0))
+    assert (len(system.forces), len(system.springs), len(system.drags)) == (5, 2, 1)
+    assert np.allclose(system.gravity, [0.5, 0, -9.81], rtol=0, atol=0)
+    (drag,) = system.drags
+    assert (drag.body, drag.linear, drag.angular) == (0, 0.3, 0.1)
+    hinge = as_system(_scene(DRIVEN_HINGE, 1.0)).joints
+    assert [j.kind for j in hinge] == ["revolute"]
+    balls = as_system(_scene(TWO_POINT_HINGE, 1.0)).joints
+    assert [j.kind for j in balls] == ["spherical", "spherical"]

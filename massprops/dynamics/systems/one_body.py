@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from massprops.dynamics.joints.model import RevoluteJoint, SphericalJoint
-from massprops.dynamics.model import Drag, Gravity, PointForce, Scene, Spring, Torque
+from massprops.dynamics.joints.model import Joint, SphericalJoint
+from massprops.dynamics.model import Gravity, PointForce, Scene, Spring, Torque
 from massprops.dynamics.systems.model import (
     WORLD,
     BodyDrag,
@@ -85,12 +85,10 @@ def as_system(scene: Scene) -> SystemScene:
             springs.append(BodySpring(WORLD, 0, np.array([term.anchor, point], np.float64),
                                       float(term.stiffness), float(term.rest_length),
                                       float(term.damping)))
-        elif isinstance(term, Drag):
+        else:  # Drag: the last of the scene's force kinds (each one's translation is tested)
             drags.append(BodyDrag(0, float(term.linear), float(term.angular)))
-        else:  # a new one-body force kind must be translated here before it can run as a system
-            raise NotImplementedError(type(term).__name__)
 
-    joints = tuple(_joint(f"j{k}", j, world) for k, j in enumerate(scene.joints))
+    joints = tuple(_joint(f"j{k}", j) for k, j in enumerate(scene.joints))
     omega = np.asarray(ini.angular_velocity, np.float64)
     omega_world = rot0 @ omega if ini.angular_velocity_frame == "body" else omega.copy()
     initial = SystemInitial(rates=_rates(joints, omega_world), project=False,
@@ -102,18 +100,17 @@ def as_system(scene: Scene) -> SystemScene:
                        drags=tuple(drags))
 
 
-def _joint(name: str, joint, world) -> SystemJoint:
-    """A one-body joint (world -> body) as a system joint at the world anchor."""
+def _joint(name: str, joint: Joint) -> SystemJoint:
+    """A one-body joint (world -> body; spherical or revolute) as a system joint at the world
+    anchor."""
     anchor = np.array(joint.anchor, np.float64)
     if isinstance(joint, SphericalJoint):
         return SystemJoint(name, "spherical", WORLD, 0, anchor, np.zeros((0, 3)))
-    if isinstance(joint, RevoluteJoint):
-        # bind_scene has set world_axis (given, or where the initial orientation turns ``axis``)
-        axis = np.asarray(joint.world_axis, np.float64)
-        return SystemJoint(name, "revolute", WORLD, 0, anchor,
-                           (axis / np.linalg.norm(axis))[None, :], damping=float(joint.damping),
-                           drive=float(joint.torque), start=joint.start, end=joint.end)
-    raise NotImplementedError(type(joint).__name__)
+    # revolute: bind_scene has set world_axis (given, or where the start turns ``axis``)
+    axis = np.asarray(joint.world_axis, np.float64)
+    return SystemJoint(name, "revolute", WORLD, 0, anchor,
+                       (axis / np.linalg.norm(axis))[None, :], damping=float(joint.damping),
+                       drive=float(joint.torque), start=joint.start, end=joint.end)
 
 
 def _rates(joints: tuple[SystemJoint, ...], omega_world: np.ndarray) -> dict:

@@ -27,7 +27,7 @@ from massprops.dynamics.systems import cutjoint
 from massprops.dynamics.systems import tree as tr
 from massprops.dynamics.systems.model import WORLD
 from massprops.errors import ComputationError
-from massprops.rotation import canonical, matrix_to_quat, rotation_angle_between
+from massprops.rotation import canonical, matrix_to_quat, quat_to_matrix, rotation_angle_between
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,10 +66,7 @@ def evaluate(system, t: np.ndarray, y: np.ndarray,
     table = _compiled(system, t, y, OUTPUTS, 18 * nb + 9 * nj + 2)
     com, rotation, motion = _bodies(table, n, nb)
     joints = table[:, 18 * nb:18 * nb + 9 * nj].reshape(n, nj, 9)
-    # the cut joints' measurement takes V = (ω, v_O) about the system frame's origin
-    spatial = np.concatenate([motion[..., :3], motion[..., 3:] - np.cross(motion[..., :3], com)],
-                             axis=-1)
-    coords, rates = _joint_states(system, y, rotation, com, spatial)
+    coords, rates = _joint_states(system, y, rotation, com, motion)
     samples = Samples(t, com + system.origin, _quaternions(rotation),
                       motion[..., 3:].copy(), motion[..., :3].copy(),
                       coords, rates, joints[..., 0:3].copy(), joints[..., 3:6].copy(), energy,
@@ -129,10 +126,12 @@ def _joint_states(system, y: np.ndarray, rotation: np.ndarray, com: np.ndarray,
                   motion: np.ndarray) -> tuple[list, list]:
     """Per scene joint (coordinates, rates) (n, k) at the states ``y`` (n, nq + nv), in the
     contract's signs (`_joint_state`): a tree joint's are slices of y, a cut joint's are
-    measured from the bodies' poses (rotation, com, V = motion of the compiled outputs)."""
+    measured from the bodies' poses (rotation, com and motion = (ω, v_com) of the compiled
+    outputs)."""
     scene, tree, nq = system.scene, system.tree, system.nq
     coords, rates = [], []
     n = len(y)
+    spatial = None  # V = (ω, v_O) about the frame's origin, formed for a cut joint only
     for k, sj in enumerate(scene.joints):
         where, idx = tree.of_scene[k]
         if sj.kind in ("fixed", "distance"):
@@ -143,20 +142,24 @@ def _joint_states(system, y: np.ndarray, rotation: np.ndarray, com: np.ndarray,
             if j.kind == "spherical" and j.reversed:
                 c, r = qj * np.array([1.0, -1.0, -1.0, -1.0]), -uj
             elif j.kind == "spherical":  # `tree.joint_rates`, all samples at once
-                c, r = qj.copy(), np.einsum("nij,nj->ni", _quat_matrices(qj), uj)
+                c, r = qj.copy(), np.einsum("nij,nj->ni", quat_to_matrix(qj), uj)
             elif not j.reversed:
                 c, r = qj.copy(), uj.copy()
             elif j.kind == "universal":
                 c, r = -qj[:, ::-1], -uj[:, ::-1]
             else:
                 c, r = -qj, -uj
-        elif sj.kind in ("revolute", "prismatic", "cylindrical"):
-            c, r = _cut_state(tree, sj, rotation, com, motion)
-        else:  # a cut ball or universal joint, sample by sample
-            c, r = np.zeros((n, _ncoord(sj.kind))), np.zeros((n, _nrate(sj.kind)))
-            for s in range(n):
-                kin = tr.Kinematics(rotation[s], com[s], motion[s], None, None, [], [])
-                c[s], r[s] = cutjoint.from_poses(tree, kin, sj)
+        else:
+            if spatial is None:
+                spatial = np.concatenate([motion[..., :3], motion[..., 3:]
+                                          - np.cross(motion[..., :3], com)], axis=-1)
+            if sj.kind in ("revolute", "prismatic", "cylindrical"):
+                c, r = _cut_state(tree, sj, rotation, com, spatial)
+            else:  # a cut ball or universal joint, sample by sample
+                c, r = np.zeros((n, _ncoord(sj.kind))), np.zeros((n, _nrate(sj.kind)))
+                for s in range(n):
+                    kin = tr.Kinematics(rotation[s], com[s], spatial[s], None, None, [], [])
+                    c[s], r[s] = cutjoint.from_poses(tree, kin, sj)
         if where == "cut" and sj.kind in ("revolute", "cylindrical", "universal"):
             for col in ([0] if sj.kind != "universal" else [0, 1]):  # measured: continuous
                 c[:, col] = np.unwrap(c[:, col])
@@ -200,17 +203,6 @@ def _cut_state(tree, sj, rotation: np.ndarray, com: np.ndarray, motion: np.ndarr
     if sj.kind == "prismatic":
         return shift[:, None], rate[:, None]
     return np.stack([turn, shift], -1), np.stack([spin, rate], -1)
-
-
-def _quat_matrices(q: np.ndarray) -> np.ndarray:
-    """(n, 3, 3): `tree.quat_matrix` of each quaternion q (n, 4), the same numbers."""
-    w, x, y, z = (q / np.sqrt(np.einsum("ni,ni->n", q, q))[:, None]).T
-    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z),
-                               2 * (x * z + w * y)], -1),
-                     np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z),
-                               2 * (y * z - w * x)], -1),
-                     np.stack([2 * (x * z - w * y), 2 * (y * z + w * x),
-                               1 - 2 * (x * x + y * y)], -1)], -2)
 
 
 def reference(system, t: np.ndarray, y: np.ndarray,
