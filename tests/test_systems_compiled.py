@@ -65,6 +65,23 @@ forces:
 time: {{duration: 1.0}}
 """
 
+FLOATING = """bodies:
+  a: {mass: 1.5, inertia: [[0.3, 0.02, -0.01], [0.02, 0.2, 0.03], [-0.01, 0.03, 0.15]],
+      position: [0.2, -0.1, 0.3], orientation: [0.9, 0.3, -0.2, 0.1]}
+  b: {mass: 0.4, inertia: [[0.02, 0, 0], [0, 0.05, 0], [0, 0, 0.06]], position: [2.0, 1.0, -0.5]}
+initial:
+  bodies: {a: {velocity: [1, -2, 0.5], angular_velocity: [3.0, -1.0, 2.0]},
+           b: {velocity: [0, 0.3, 0], angular_velocity: [0.1, 0.2, -0.4]}}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+  - {type: force, body: a, vector: [0.5, 0.2, -0.3], frame: body, point: [0.1, 0.05, -0.2]}
+  - {type: spring, bodies: [a, b], points: [[0.25, 0, 0.3], [1.9, 1.0, -0.4]], stiffness: 4.0,
+     rest_length: 1.0, damping: 0.3}
+time: {duration: 1.0}
+"""
+"""Two floating bodies, no joint: two floating roots (`systems_mass._floating_root`), the second
+away from the point positions are measured from."""
+
 
 def _numpy_rhs(system, t, y):
     sol = system.solve(t, y, check=False, full=False)
@@ -102,14 +119,17 @@ def _turned_four_bar() -> str:
     return yaml.safe_dump(data)
 
 
-@pytest.mark.parametrize("scene", ["every_kind", "thrown_drag", "four_bar", "four_bar_turned",
-                                   "chain10", "andrews", "slider_crank", "double_pendulum"])
+@pytest.mark.parametrize("scene", ["every_kind", "thrown_drag", "floating", "four_bar",
+                                   "four_bar_turned", "chain10", "andrews", "slider_crank",
+                                   "double_pendulum"])
 def test_compiled_right_hand_side_and_projection_equal_numpy(scene):
     if scene == "every_kind":
         loaded = parse_system(EVERY_KIND, source="k.yaml", base_dir=SAMPLES)
     elif scene == "thrown_drag":  # a floating base with drag: it runs in the world frame
         loaded = parse_system(THROWN_DRAG, source="f.yaml", base_dir=SAMPLES)
         assert prepare(loaded)[0].falling is None
+    elif scene == "floating":
+        loaded = parse_system(FLOATING, source="f.yaml", base_dir=SAMPLES)
     elif scene == "four_bar_turned":
         loaded = parse_system(_turned_four_bar(), source="t.yaml", base_dir=SAMPLES)
         assert (loaded.bodies and prepare(loaded)[0].rank) == 2

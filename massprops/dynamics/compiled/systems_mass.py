@@ -7,13 +7,20 @@ vectors about O (no transforms between bodies): M u̇ + h = τ, h = Sᵀ Σ_subt
 − f_ext). ABA (Featherstone, Rigid Body Dynamics Algorithms, §7.3, here in absolute
 coordinates): inward, U = I^A S, D = Sᵀ U, ũ = τ − Sᵀ p^A, the parent gets I^A − U D⁻¹ Uᵀ and
 p^A + I^a c + U D⁻¹ ũ (c the joint's bias acceleration); outward, u̇ = D⁻¹ (ũ − Uᵀ a_parent−c).
+A floating root (a free joint, S invertible) takes its acceleration from I^A A + p^A = S⁻ᵀ τ
+directly (`_floating_root`).
 """
 
 from __future__ import annotations
 
 from massprops.dynamics.compiled.jit import array_inner, inlined
 from massprops.dynamics.compiled.systems_linalg import cholesky, lower_solve, upper_solve
-from massprops.dynamics.compiled.systems_tree import INERTIA_SIZE, spatial_matrix, spatial_times
+from massprops.dynamics.compiled.systems_tree import (
+    FREE,
+    INERTIA_SIZE,
+    spatial_matrix,
+    spatial_times,
+)
 from massprops.dynamics.compiled.unowned import at
 
 
@@ -44,6 +51,8 @@ def aba(pp, wp, udot):
     low, tmp = m6[0], m6[1]
     for k in range(ji.shape[0] - 1, -1, -1):
         par, ch, iu, nvj = ji[k, 1], ji[k, 2], ji[k, 4], ji[k, 6]
+        if ji[k, 0] == FREE:  # a root: nothing to pass on (`_floating_root`, outward)
+            continue
         for c in range(nvj):  # U = I^A S, ũ = τ − Sᵀ p^A
             x = tau[iu + c]
             for r in range(6):
@@ -98,6 +107,11 @@ def aba(pp, wp, udot):
             pa[par, r] += x
     for k in range(ji.shape[0]):
         par, ch, iu, nvj = ji[k, 1], ji[k, 2], ji[k, 4], ji[k, 6]
+        if ji[k, 0] == FREE:
+            if not _floating_root(ia[ch], pa[ch], s, tau, iu, low, v6[1], acc[ch], cb[ch],
+                                  udot):
+                return False
+            continue
         for r in range(6):
             acc[ch, r] = (acc[par, r] if par >= 0 else 0.0) + cb[ch, r]  # now the true A
         for a in range(nvj):
@@ -113,6 +127,41 @@ def aba(pp, wp, udot):
         for r in range(6):
             for a in range(nvj):
                 acc[ch, r] += s[r, iu + a] * udot[iu + a]
+    return True
+
+
+@inlined
+def _floating_root(ia, pa, s, tau, iu, low, f, acc, cb, udot):
+    """acc (6,) = A and udot[iu:iu + 6] of a floating root, a free joint to the world (u = [v_c,
+    ω in its own frame], S's columns (0, e_i) and (w_i, c × w_i), the w_i orthonormal). S is
+    invertible, so the articulated equation Sᵀ (I^A A + p^A) = τ gives A = (I^A)⁻¹ (f − p^A),
+    f = S⁻ᵀ τ: one 6 × 6 Cholesky, where the general step forms U, D = Sᵀ U and D⁻¹ (~5 times
+    the work, the whole ABA of a lone body); then u̇ = S⁻¹ (A − c). False if I^A is not
+    positive definite."""
+    for i in range(3):  # f = S⁻ᵀ τ: f_lin = τ_v, then w_i · f_ang = τ_ω,i − (c × w_i) · f_lin
+        f[3 + i] = tau[iu + i]
+    f[0] = f[1] = f[2] = 0.0
+    for i in range(3):
+        col = iu + 3 + i
+        g = tau[col] - (s[3, col] * f[3] + s[4, col] * f[4] + s[5, col] * f[5])
+        f[0], f[1], f[2] = f[0] + g * s[0, col], f[1] + g * s[1, col], f[2] + g * s[2, col]
+    for r in range(6):
+        f[r] -= pa[r]
+    if not cholesky(ia, low, 6):
+        return False
+    lower_solve(low, f, 6)
+    upper_solve(low, f, 6)
+    for r in range(6):
+        acc[r] = f[r]
+    for i in range(3):  # ω̇'s rates: w_i · α, α = A_ang − c_ang
+        col = iu + 3 + i
+        udot[col] = s[0, col] * (f[0] - cb[0]) + s[1, col] * (f[1] - cb[1]) \
+            + s[2, col] * (f[2] - cb[2])
+    for i in range(3):  # v̇_c = (A_lin − c_lin) − Σ (c × w_j) ω̇_j
+        x = f[3 + i] - cb[3 + i]
+        for j in range(3):
+            x -= s[3 + i, iu + 3 + j] * udot[iu + 3 + j]
+        udot[iu + i] = x
     return True
 
 
