@@ -1,7 +1,8 @@
 """Speed of `massprops simulate` against scipy's solve_ivp(method="DOP853") at equal final error.
 
-(a) In process: the torqued asymmetric body of bench_precision.py over 100 s. Our dop853
-    (``runner.run_once``: the compiled run, warm-up apart) against solve_ivp DOP853 on the same
+(a) In process: the torqued asymmetric body of bench_precision.py over 100 s. Our dop853 (the
+    engine `simulate` runs it on, the system of one body: ``systems.run.simulate_system``, its
+    main run alone, warm-up apart) against solve_ivp DOP853 on the same
     equations (``_scipy_model``, checked against our compiled right-hand side), each at the rtol
     that brings its final error just under 1e-6 and 1e-10 (rtol is tuned by tolerance
     proportionality, a few runs each). Best of --repeat. Target: scipy / massprops >= 20.
@@ -39,12 +40,14 @@ import numpy as np
 from _scenes import LONG_DRAG, SCENES
 
 from massprops.dynamics.accuracy import ADAPTIVE_TIGHTENING, Scales, state_error
+from massprops.dynamics.compiled.compiling import SYSTEMS, prepare
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.precision import reference_run
 from massprops.dynamics.program import compile_forces, initial_principal_state
-from massprops.dynamics.runner import run_once
 from massprops.dynamics.scene import load_scene
+from massprops.dynamics.systems.one_body import as_system
+from massprops.dynamics.systems.run import simulate_system
 
 HERE = Path(__file__).resolve().parent
 TARGETS = (1e-6, 1e-10)
@@ -63,6 +66,7 @@ class Problem:
 
     def __init__(self, path: Path):
         self.scene = load_scene(path)
+        self.system = as_system(self.scene)
         peer.check_same_equations(self.scene)
         self.program = compile_forces(self.scene)
         self.t_out = np.linspace(0.0, self.scene.time.duration, SAMPLES + 1)
@@ -77,9 +81,17 @@ class Problem:
         return state_error(final_row(traj), final_row(self.truth), self.scales)
 
     def ours(self, rtol: float) -> tuple[float, int, int, float]:
-        """(error, steps, nfev, wall s) of our dop853 at ``rtol``."""
-        run = run_once(self.scene, self.program, INTEGRATORS["dop853"], rtol, self.t_out)
-        return self.error_of(run.t, run.y), int(run.stats[0]), int(run.stats[1]), run.wall
+        """(error, steps, nfev, wall s) of our dop853 at ``rtol``: the body as the system of
+        one body, as `simulate` runs it, without its estimate's companions."""
+        run = simulate_system(self.system, integrator="dop853", rtol=rtol, estimate=False,
+                              every=self.scene.time.duration / SAMPLES)
+        body = run.samples
+        last = SimpleNamespace(t=body.t[-1:], position=body.position[-1:, 0],
+                               orientation=body.orientation[-1:, 0],
+                               velocity=body.velocity[-1:, 0],
+                               angular_velocity=body.angular_velocity[-1:, 0])
+        return (state_error(last, final_row(self.truth), self.scales), run.steps,
+                run.evaluations, run.wall_time_s)
 
     def scipy(self, rtol: float) -> tuple[float, int, int, float]:
         """(error, steps (unknown: 0), nfev, wall s) of solve_ivp DOP853 at ``rtol``."""
@@ -115,18 +127,14 @@ def best_wall(run, rtol: float, repeat: int) -> float:
     return min(run(rtol)[3] for _ in range(repeat))
 
 
-def cold_compile_seconds(scene_path: Path) -> float:
-    """Warm-up of our dop853 in a fresh process with an empty numba cache: a real compile."""
-    code = ("import sys, numpy as np; from massprops.dynamics.scene import load_scene; "
-            "from massprops.dynamics.program import compile_forces; "
-            "from massprops.dynamics.integrators import INTEGRATORS; "
-            "from massprops.dynamics.runner import run_once; "
-            "s = load_scene(sys.argv[1]); "
-            "r = run_once(s, compile_forces(s), INTEGRATORS['dop853'], 1e-6, np.array([0.0])); "
-            "print(r.warmup)")
+def cold_compile_seconds() -> float:
+    """Warm-up of the systems kernel (every time-stepped method) in a fresh process with an
+    empty numba cache: a real compile (about two minutes)."""
+    code = ("from massprops.dynamics.compiled.compiling import SYSTEMS, prepare; "
+            "print(prepare([SYSTEMS]))")
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-        out = subprocess.run([sys.executable, "-c", code, str(scene_path)], env=env,
+        out = subprocess.run([sys.executable, "-c", code], env=env,
                              cwd=HERE.parent, check=True, capture_output=True, text=True)
     return float(out.stdout.strip().splitlines()[-1])
 
@@ -134,18 +142,17 @@ def cold_compile_seconds(scene_path: Path) -> float:
 def part_a(folder: Path, args) -> None:
     path = folder / "torqued100.yaml"
     path.write_text(SCENES["torqued"].text(duration=100.0), encoding="utf-8")
-    scene = load_scene(path)
-    first = run_once(scene, compile_forces(scene), INTEGRATORS["dop853"], 1e-6, np.array([0.0]))
+    first = prepare([SYSTEMS])
     problem = Problem(path)
     ref = problem.reference
     print(f"(a) in process: {SCENES['torqued'].title.replace('30 s', '100 s')}")
     print(f"    reference: {ref['integrator']} rtol {ref['setting']:g}, accuracy "
           f"{ref['accuracy']:.1e}; error = contract metric at t = 100 s")
     print(f"    our dop853, first call in this process (compile or cache load): "
-          f"{first.warmup:.2f} s")
+          f"{first:.2f} s")
     if not args.no_cold:
         print(f"    our dop853, cold compile (fresh process, empty numba cache): "
-              f"{cold_compile_seconds(path):.2f} s")
+              f"{cold_compile_seconds():.2f} s")
     print(f"    {'target':>7} {'solver':>10} {'rtol':>9} {'error':>9} {'steps':>7} {'nfev':>8} "
           f"{'wall s':>9}")
     for target in TARGETS:

@@ -1,6 +1,6 @@
 """The global error estimate of fixed-step runs: Richardson's rule with the observed ratio of the
 2h and 4h companions (accuracy.global_estimate), and the probe of modes faster than the step
-(stiffness.py). Truth: error models with known terms, and a resolving dop853 run."""
+(systems/stiffness.py). Truth: error models with known terms, and a resolving dop853 run."""
 
 from __future__ import annotations
 
@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from massprops.dynamics import stiffness
 from massprops.dynamics.accuracy import Scales, global_estimate, state_error
 from massprops.dynamics.scene import load_scene
 from massprops.dynamics.simulate import simulate
+from massprops.dynamics.systems import stiffness
 
 SCENES = Path(__file__).resolve().parent.parent / "sample_scenes"
 
@@ -94,32 +94,28 @@ def test_an_oscillation_faster_than_the_step_is_in_the_estimate():
 
 
 def test_a_step_that_resolves_every_rate_runs_no_probe(monkeypatch):
-    """Same scene, h·λ = 0.5: nothing is unresolved, the probe must cost nothing."""
-    def refuse(*_args, **_kwargs):
-        raise AssertionError("probe ran on a resolved step")
+    """Same scene, h·ρ = 0.5: nothing is unresolved, the probe's runs must cost nothing; at
+    h = 8 ms (h·ρ = 8) they run."""
+    steps = []
+    run = stiffness.integrate
 
-    monkeypatch.setattr("massprops.dynamics.simulate.unresolved_mode_error", refuse)
+    def spy(system, y0, t_out, setting, *args):
+        steps.append(setting)
+        return run(system, y0, t_out, setting, *args)
+
+    monkeypatch.setattr(stiffness, "integrate", spy)
     sc = load_scene(SCENES / "unstable.yaml")
     result = simulate(sc, integrator="implicit", step=5e-4)
     assert result.diagnostics["error_estimate"] is not None
-    assert not stiffness.unresolved(_spec("implicit"), 5e-4, _program(sc))
-    assert stiffness.unresolved(_spec("implicit"), 0.008, _program(sc))
-    assert not stiffness.unresolved(_spec("rk4"), 0.008, _program(sc))  # explicit: diverges
-
-
-def _spec(name):
-    from massprops.dynamics.integrators import INTEGRATORS
-    return INTEGRATORS[name]
-
-
-def _program(sc):
-    from massprops.dynamics.program import compile_forces
-    return compile_forces(sc)
+    assert steps == []
+    simulate(sc, integrator="implicit", step=0.008)
+    assert steps == [0.008, stiffness.PROBE_RTOL]  # the method, and dop853 resolving the mode
 
 
 def test_a_failed_probe_or_runaway_companion_gives_no_estimate_not_infinity(monkeypatch):
     """The JSON output refuses inf (allow_nan=False): an estimate whose size is unknown is null."""
-    monkeypatch.setattr("massprops.dynamics.simulate.unresolved_mode_error",
+    # the implicit method runs the body as a system of one body: the systems' probe
+    monkeypatch.setattr("massprops.dynamics.systems.methods.unresolved_mode_error",
                         lambda *_args: math.inf)
     sc = load_scene(SCENES / "unstable.yaml")
     assert simulate(sc, integrator="implicit", step=0.008).diagnostics["error_estimate"] is None

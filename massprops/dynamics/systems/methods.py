@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from massprops.dynamics.accuracy import companion_settings, global_estimate
+from massprops.dynamics.budget import STEP_BUDGET
 from massprops.dynamics.systems.integrate import integrate
 from massprops.dynamics.systems.outputs import Samples, distance, evaluate_states
 from massprops.dynamics.systems.stiffness import fastest_rate, unresolved_mode_error
@@ -42,8 +43,6 @@ def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
     (`dynamics.simulate.choose_integrator`): implicit where an explicit method would need more
     than STEP_BUDGET steps to resolve the fastest rate over the run, else dop853. A system
     without springs or dampers has no such rate and pays nothing to find that out."""
-    # deferred: dynamics.simulate brings the one-body run's modules (only its budget is shared)
-    from massprops.dynamics.simulate import STEP_BUDGET
 
     scene, reason = system.scene, None
     if name == "auto":

@@ -149,10 +149,14 @@ class SystemScene:
     robot: str | None = None  # the description a `model:` scene names (outputs add `holding`)
     couplings: tuple[JointCoupling, ...] = ()  # a description's mimic/equality relations
     drags: tuple[BodyDrag, ...] = ()
+    length: float | None = None  # the size a scene fixes (one body's: the contract's metric)
 
     @property
     def size(self) -> float:
-        """m, the system's length scale: the extent of the assembly and the largest body."""
+        """m, the system's length scale: ``length`` where the scene fixes it, else the extent
+        of the assembly and the largest body."""
+        if self.length is not None:
+            return self.length
         points = [b.com0 for b in self.bodies] + [j.point for j in self.joints
                                                    if j.point is not None]
         spread = float(np.ptp(np.array(points), axis=0).max()) if len(points) > 1 else 0.0

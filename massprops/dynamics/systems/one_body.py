@@ -97,7 +97,7 @@ def as_system(scene: Scene) -> SystemScene:
     return SystemScene((system_body,), joints, gravity, tuple(forces), tuple(springs), initial,
                        scene.time, scene.output, source=scene.source,
                        input_files=tuple(scene.input_files), warnings=tuple(scene.warnings),
-                       drags=tuple(drags))
+                       drags=tuple(drags), length=float(body.size))
 
 
 def _joint(name: str, joint: Joint) -> SystemJoint:

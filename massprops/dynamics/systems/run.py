@@ -14,6 +14,7 @@ import numpy as np
 
 from massprops import tolerances
 from massprops.dynamics.accuracy import estimate_note
+from massprops.dynamics.budget import ENERGY_BLOWUP, sample_times
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
@@ -164,9 +165,6 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     `compiled.compiling.prepare`). ``progress(fraction)`` is called between the run's compiled
     calls. Ctrl-C there propagates, or with ``interruptible`` returns the samples computed so
     far with ``interrupted`` set (no error estimate; the CLI exits 130)."""
-    # deferred: dynamics.simulate brings the one-body run's modules (the output-time rule is
-    # shared, the rest is not needed here)
-    from massprops.dynamics.simulate import sample_times
 
     name = integrator or scene.time.integrator
     if name not in SYSTEM_INTEGRATORS:
@@ -216,7 +214,11 @@ def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, star
     if system.cannot_gain_energy():
         with np.errstate(all="ignore"):  # a diverged run's energy may overflow: said below
             energy = energies(system, run.y_out)
-        _check_energy(system, t_out, energy, name)
+        try:
+            _check_energy(system, t_out, energy, name)
+        except DivergenceError as exc:  # with the samples, to be written
+            exc.partial = _partial(system, t_out, run, wall, notes, name, reason)
+            raise
     conservative = system.conservative()
     samples = evaluate(system, t_out, run.y_out, energy if conservative else None)
     residual = samples.residual
@@ -326,8 +328,6 @@ def _check_energy(system: System, t: np.ndarray, energy: np.ndarray, name: str) 
     sample with more than ENERGY_BLOWUP times its energy scale above its start: a step beyond
     the method's stability whose state grew without becoming NaN (RK4 at h ρ = 2000 reached
     angles of 4e34 rad)."""
-    # deferred: dynamics.simulate brings the one-body run's modules (only the factor is shared)
-    from massprops.dynamics.simulate import ENERGY_BLOWUP
 
     scale = max(abs(energy[0]), _energy_scale(system))
     with np.errstate(invalid="ignore"):

@@ -1,12 +1,28 @@
-"""A system's fastest rate, and the one error a stiff method's companion runs cannot see on it:
-a fast mode the step does not resolve (`dynamics.stiffness` says why and how, for one body).
+"""A system's fastest rate, and the one error a stiff method's companion runs cannot see: an
+oscillation faster than the step (one body is the system of one body: its runs use this too).
 
-Radau IIA and the midpoint rule at h ρ > 1 (ρ the fastest rate) damp or alias a fast mode, and
-their 2h and 4h companions do it alike, so Richardson sees nothing while the truth keeps
-oscillating: a double pendulum with an undamped k = 1e8 N·m/rad elbow spring at h = 1 ms was
-wrong by 1.9e-4 (its elbow's small fast swing) where the companions said 1e-11. The probe runs
-the method and dop853 at PROBE_RTOL over a short window from the start and compares them, at
-the one-body probe's times, in the whole run's scales.
+A fixed-step stiff method (``implicit``, Radau IIA; ``midpoint``) stays stable far beyond the
+explicit step limit, but a mode with rate ρ and h·ρ > 1 is not followed: Radau damps it out
+within a few steps, the midpoint rule keeps its amplitude at an aliased phase (and does not damp
+a fast decaying mode at all). The 2h and 4h companions of the error estimate treat the mode
+the same way, so Richardson sees nothing while the truth keeps oscillating: on
+``sample_scenes/unstable.yaml`` Radau at h = 8 ms is 100 % wrong where Richardson says 1e-5; a
+double pendulum with an undamped k = 1e8 N·m/rad elbow spring at h = 1 ms was wrong by 1.9e-4
+(its elbow's small fast swing) where the companions said 1e-11.
+
+The probe measures it directly where it can exist: over a short window from the start, long
+enough for the method to have removed the mode (PROBE_STEPS steps) and for the mode to have
+oscillated (PROBE_PERIODS periods of the fastest rate), the run is compared with dop853 at
+PROBE_RTOL, which resolves it, in the whole run's scales. Runs whose step resolves every rate
+never run it.
+
+Where it compares: PROBE_SAMPLES points spread over the second half of the window, where the
+method has had PROBE_STEPS / 2 steps to remove the mode, and every sample time of the run inside
+the window. Not the first half's points: a start off the slow manifold of a fast decaying mode
+(heavy_top_damped's pivot, a layer ~1e-6 s long) leaves a remnant that Radau removes by a
+factor |R(hρ)| per step (~3/(hρ), 2.6e-3 there) while the truth loses it within the layer: 9e-6
+of the angular velocity inside the first step, 7e-8 at its end, nothing 3 steps later. That
+error is real only at the times a run is sampled, and is counted exactly there.
 """
 
 from __future__ import annotations
@@ -16,9 +32,22 @@ import math
 import numpy as np
 
 from massprops import tolerances
-from massprops.dynamics.stiffness import PROBE_PERIODS, PROBE_RTOL, PROBE_SAMPLES, PROBE_STEPS
 from massprops.dynamics.systems.integrate import integrate
 from massprops.dynamics.systems.outputs import Samples, distance, evaluate_states
+
+PROBE_STEPS = 16
+"""Steps of the method inside the window: Radau's |R(hρ)| <= 0.6 for h·ρ > 1 leaves < 3e-4."""
+
+PROBE_PERIODS = 20.0
+"""Periods 2π/ρ of the fastest rate inside the window."""
+
+PROBE_SAMPLES = 64
+"""Comparison points over the second half of the window."""
+
+PROBE_RTOL = 1e-12
+"""The resolving run's tolerance. Its error is the probe's floor: at 1e-10 it was up to 3e-9 of
+heavy_top_damped's angular velocity (while the implicit run is good to 7e-11 there), which alone
+made that scene's estimate 9e-9; 1e-12 costs little on a window of 16 steps."""
 
 PROBE_MAX_STEPS = 100_000
 """Steps the probe's runs may take: a rate of 1e12/s (a damper on a tiny inertia) would need
