@@ -243,3 +243,13 @@ def test_every_run_ends_in_a_result_or_a_clean_error(moments, spin, duration, fo
     out = strict_json(res.as_dict())
     assert np.all(np.isfinite(res.trajectory.orientation))
     assert abs(np.linalg.norm(out["final"]["orientation"]) - 1.0) < 1e-6
+
+
+def test_a_nan_newton_correction_is_not_convergence():
+    """numba's and Python's max(0.0, nan) is 0.0: the Newton norm takes the worst correction
+    with `worst`, which keeps a NaN (a stiff spring's stage Jacobians gave NaN corrections that
+    passed as converged, and the run "diverged" where its Newton had failed)."""
+    from massprops.dynamics.integrators._shared import worst
+
+    assert math.isnan(worst.py_func(0.0, math.nan)) and math.isnan(worst.py_func(math.nan, 1.0))
+    assert worst.py_func(2.0, 1.0) == 2.0 and worst.py_func(1.0, 2.0) == 2.0

@@ -14,9 +14,16 @@ The implicit methods solve their stage equations by simplified Newton iterations
 Jacobian ∂ẏ/∂y by forward differences at the step's start (n evaluations; Radau's 3n × 3n
 system I − h A ⊗ J is factorised whole: systems are small), corrections measured against the
 error scales (each component's floor and running max): they stop when the predicted remaining
-correction η‖Δ‖ is below NEWTON_TOL, or the correction is at round-off. Where Newton fails,
-the step is taken again in 2, 4, ... MAX_PIECES pieces, each a full step (projected, tested);
-beyond that the run stops with UNDERFLOW.
+correction η‖Δ‖ is below NEWTON_TOL, or the correction is at round-off. Where Radau's Newton
+fails with the Jacobian at the step's start (it turns within the step: a stiff spring on a
+fast-spinning body), the step is tried with the three stage Jacobians J(y + Z_s), re-evaluated
+at the iterate while it converges slowly, as the one-body kernel does
+(`dynamics.integrators.radau`), and they stay in use for RETRY_FIRST steps, doubling up to
+RETRY_MAX each time the one Jacobian fails again. Where Newton still fails, the step is taken
+again in 2, 4, ... MAX_PIECES pieces, each a full step (projected, tested); beyond that the run
+stops with UNDERFLOW. The number of pieces persists: it halves after two clean steps (a
+heavy_top_damped.yaml run without that and the stage Jacobians: 80,000 pieces, 42,000 tried
+and cut again, 4.5e6 evaluations).
 
 istats and fstats as in `systems_dop853`: istats[0] the steps taken (each piece one), istats[2]
 the pieces tried and taken again smaller; the run bound counts both (each costs a Jacobian).
@@ -43,7 +50,13 @@ from massprops.dynamics.compiled.systems_step import (
 )
 from massprops.dynamics.compiled.unowned import by_ref
 from massprops.dynamics.integrators._newton import NEWTON_TOL, ROUNDOFF, lu_factor, lu_solve
-from massprops.dynamics.integrators._shared import EPS, step_count
+from massprops.dynamics.integrators._shared import EPS, step_count, worst
+from massprops.dynamics.integrators.radau import (
+    RETRY_FIRST,
+    RETRY_MAX,
+    STAGE_REFRESHES,
+    STAGE_SLOW,
+)
 from massprops.dynamics.integrators.radau import A as RADAU_A
 
 RK4, MIDPOINT, RADAU = 0, 1, 2
@@ -67,6 +80,12 @@ NEWTON_FAILED = -1
 """Internal status of a step whose Newton iterations failed (then cut into pieces)."""
 
 RADAU_C = np.array([RADAU_A[0].sum(), RADAU_A[1].sum(), 1.0])
+
+LEVEL, STREAK, STAGE, CALM, RETRY, TRYING = range(6)
+MODE_SIZE = 6
+"""The step loop's memory across steps (``scratch``'s last array): pieces per step 2^LEVEL and
+the clean steps at that level; Radau's stage-Jacobian mode, the steps taken in it, the steps
+it lasts (RETRY) and whether the one-Jacobian iteration is on trial again."""
 """(3,) Radau IIA's nodes (the row sums of A)."""
 
 
@@ -74,9 +93,11 @@ RADAU_C = np.array([RADAU_A[0].sum(), RADAU_A[1].sum(), 1.0])
 def scratch(n, method):
     """The step loop's own arrays for a state of n entries (`segment`'s ``scratch``)."""
     ns = 3 * n if method == RADAU else n
+    mode = np.zeros(MODE_SIZE, dtype=np.int64)
+    mode[RETRY] = RETRY_FIRST
     return (np.empty((4, n)), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
             np.empty((n, n)), np.empty((ns, ns)), np.zeros(ns, dtype=np.int64),
-            np.empty((3, n)), np.empty(ns), np.zeros(3), np.empty(n), np.empty(n))
+            np.empty((3, n)), np.empty(ns), np.zeros(3), np.empty(n), np.empty(n), mode)
 
 
 @array_inner
@@ -86,7 +107,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
     norm's: each component's floor and running max |y_i| (updated here, as DOP853's). The
     arguments come from `systems_kernel.run_segment` (views numba does not reference-count)."""
     y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail = arrays
-    k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp = scratch
+    k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp, mode = scratch
     n = y.size
     rank0 = istats[6]
     # every load is on or off throughout a segment (segments end at the window edges), so the
@@ -111,7 +132,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
         for c in range(n):
             ya[c], k[0, c] = y[c], fa[c]  # the step's start, kept for a retry in pieces
         kout0 = istats[4]
-        pieces = 1
+        pieces, clean = 1 << mode[LEVEL], True
         while True:
             status = OK
             for p in range(pieces):
@@ -128,7 +149,8 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
                 break
             istats[0] -= p  # the p pieces accepted before the one that failed, and that one,
             istats[2] += p + 1  # are taken again smaller: tried, not steps
-            pieces *= 2
+            pieces, clean = 2 * pieces, False
+            mode[LEVEL] += 1
             if pieces > MAX_PIECES:
                 fail(istats, fstats, yfail, UNDERFLOW, ta, ya)
                 return
@@ -137,6 +159,9 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
             istats[4] = kout0
         if status != OK:
             return  # _step recorded the failure
+        mode[STREAK] = mode[STREAK] + 1 if clean else 0
+        if mode[LEVEL] > 0 and mode[STREAK] >= 2:  # two clean steps: pieces twice as long
+            mode[LEVEL], mode[STREAK] = mode[LEVEL] - 1, 0
 
 
 @array_inner
@@ -146,17 +171,28 @@ def _step(pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
     status (recorded). Every evaluation judges the load windows at ``tw``; pp, wp: the program
     and workspace by reference (`unowned.by_ref`, made by `segment`)."""
     y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail = arrays
-    k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp = scratch
+    k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp, mode = scratch
     n = y.size
     h = tb - ta
+    staged = method == RADAU and mode[STAGE] == 1
     if method == RK4:
         status = _rk4(pp, wp, tw, h, y, fa, k, ytmp, ynew, rank0)
         istats[1] += 3
+    elif staged:
+        status, evals = _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0, True)
+        istats[1] += evals
     else:
         status = _jacobian(pp, wp, tw, y, fa, scales, jac, ytmp, ftmp, rank0)
         istats[1] += n
         if status == OK:
-            status, evals = _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0)
+            status, evals = _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0, False)
+            istats[1] += evals
+        if status == NEWTON_FAILED and method == RADAU:  # J turns within the step: the stage
+            staged = True  # Jacobians, for this step and a while
+            mode[STAGE], mode[CALM] = 1, 0
+            if mode[TRYING]:
+                mode[RETRY], mode[TRYING] = min(2 * mode[RETRY], RETRY_MAX), 0
+            status, evals = _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0, True)
             istats[1] += evals
     if status == NEWTON_FAILED:
         return status
@@ -183,6 +219,12 @@ def _step(pp, wp, scratch, arrays, method, ta, tb, tw, rank0):
     for c in range(n):
         y[c], fa[c] = ynew[c], fb[c]
         scales[c] = max(scales[c], abs(y[c]))
+    if staged:
+        mode[CALM] += 1
+        if mode[CALM] >= mode[RETRY]:  # the one Jacobian again, on trial
+            mode[STAGE], mode[TRYING] = 0, 1
+    elif mode[TRYING]:
+        mode[RETRY], mode[TRYING] = RETRY_FIRST, 0
     return OK
 
 
@@ -229,28 +271,28 @@ def _jacobian(pp, wp, tw, y, f0, scales, jac, ytmp, ftmp, rank0):
 
 
 @array_inner
-def _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0):
+def _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0, stage):
     """ynew by simplified Newton on the stage equations: Radau IIA, Z (3, n) with
     Z − h (A ⊗ I) F(y + Z) = 0, ynew = y + Z_3; the midpoint rule, w = y1 − y with
-    w − h f(t + h/2, y + w/2) = 0 (in z[0]). (status, evaluations)."""
-    k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp = scratch
+    w − h f(t + h/2, y + w/2) = 0 (in z[0]). The Newton matrix from ``jac`` (J at y), or with
+    ``stage`` (Radau) from the stage Jacobians J(y + Z_s) at the first iterate, evaluated anew
+    at the iterate (at most STAGE_REFRESHES times) while it converges slower than STAGE_SLOW
+    or not at all. (status, evaluations)."""
+    k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp, mode = scratch
     n = y.size
     st = 3 if method == RADAU else 1
-    for r in range(st):  # the Newton matrix I − h A ⊗ J (the midpoint rule: I − h/2 J)
-        for s in range(st):
-            a = RADAU_A[r, s] if method == RADAU else 0.5
-            for i in range(n):
-                for j in range(n):
-                    big[r * n + i, s * n + j] = -h * a * jac[i, j]
-                big[r * n + i, s * n + i] += 1.0 if r == s else 0.0
+    for r in range(st):
         c = RADAU_C[r] if method == RADAU else 1.0
         for i in range(n):
             z[r, i] = h * c * fa[i]  # the explicit Euler guess: a first correction of O(h²)
-    if not lu_factor(big, piv):
-        return NEWTON_FAILED, 0
+    if not stage:
+        _newton_matrix(big, jac, h, method, -1)
+        if not lu_factor(big, piv):
+            return NEWTON_FAILED, 0
     # η = 1 at the first iteration: nothing predicts the rate yet, so a step converges after
     # one iteration only on a correction at round-off
     evals, eta, norm_old = 0, 1.0, math.inf
+    refresh, refreshes = stage, 0
     for it in range(ITERATIONS):
         for s in range(st):  # the stage derivatives F(y + Z_s), in k[1:]
             for i in range(n):
@@ -263,6 +305,19 @@ def _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0):
                 for i in range(n):
                     ynew[i] = ytmp[i]  # where it failed, for the message
                 return status, evals
+        if refresh:  # the stage Jacobians at this iterate (ynew holds each stage's state)
+            refresh = False
+            for s in range(st):
+                for i in range(n):
+                    ynew[i] = y[i] + z[s, i]
+                status = _jacobian(pp, wp, tw, ynew, k[1 + s], scales, jac, ytmp, ftmp, rank0)
+                evals += n
+                if status != OK:  # a Jacobian at an iterate gone wild
+                    return NEWTON_FAILED, evals
+                _newton_matrix(big, jac, h, method, s)
+            if not lu_factor(big, piv):
+                return NEWTON_FAILED, evals
+            norm_old = math.inf  # a new matrix: the last rate says nothing about it
         for r in range(st):  # the residual −(Z − h A F), solved for the correction
             for i in range(n):
                 x = z[r, i]
@@ -277,11 +332,15 @@ def _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0):
         for i in range(n):  # each component against the largest it has been, or is at the end
             sc = max(scales[i], abs(y[i] + z[st - 1, i]))
             for r in range(st):
-                dnorm = max(dnorm, abs(dz[r * n + i]) / sc)
+                dnorm = worst(dnorm, abs(dz[r * n + i]) / sc)
         if not math.isfinite(dnorm):
             return NEWTON_FAILED, evals
-        if it > 0:
+        if math.isfinite(norm_old):
             theta = dnorm / norm_old
+            if stage and theta > STAGE_SLOW and refreshes < STAGE_REFRESHES \
+                    and it + 1 < ITERATIONS and dnorm > ROUNDOFF:
+                refresh, refreshes = True, refreshes + 1  # Jacobians at the current iterate
+                continue
             if theta >= 0.99:
                 return NEWTON_FAILED, evals
             eta = theta / (1.0 - theta)
@@ -291,6 +350,23 @@ def _implicit(pp, wp, scratch, method, tw, h, y, scales, rank0):
                 ynew[i] = y[i] + z[st - 1, i]
             return OK, evals
     return NEWTON_FAILED, evals
+
+
+@inlined
+def _newton_matrix(big, jac, h, method, col):
+    """The Newton matrix I − h (A ⊗ I) diag(J_s) (the midpoint rule: I − h/2 J), all of it
+    from the one J = ``jac`` (``col`` < 0) or its column block ``col`` from J_col = ``jac``."""
+    n = jac.shape[0]
+    st = 3 if method == RADAU else 1
+    for r in range(st):
+        for s in range(st):
+            if col >= 0 and s != col:
+                continue
+            a = RADAU_A[r, s] if method == RADAU else 0.5
+            for i in range(n):
+                for j in range(n):
+                    big[r * n + i, s * n + j] = -h * a * jac[i, j]
+                big[r * n + i, s * n + i] += 1.0 if r == s else 0.0
 
 
 @array_inner

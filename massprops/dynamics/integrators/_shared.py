@@ -115,6 +115,16 @@ def grow_scales(y, blk, scales):
 
 
 @inner
+def worst(a, b):
+    """max(a, b), and NaN if either is: Python's and numba's max(0.0, nan) is 0.0, so a NaN
+    correction would pass a Newton convergence test as zero (it did: a stiff spring's stage
+    Jacobians gave NaN corrections that "converged" to a NaN state)."""
+    if a != a or b != b:
+        return math.nan
+    return a if a >= b else b
+
+
+@inner
 def ratio(e, s):
     """e / s for an error e and a scale s >= 0, with 0 / 0 = 0 (a block that is exactly zero and
     has no error) and e / 0 = inf (an error where there is nothing to compare it with)."""

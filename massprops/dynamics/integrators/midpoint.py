@@ -54,6 +54,7 @@ from massprops.dynamics.integrators._shared import (
     start_scales,
     step_count,
     too_small,
+    worst,
 )
 from massprops.dynamics.integrators.base import (
     NFEV,
@@ -107,7 +108,7 @@ def _solve(y, h, z, prog, lu, piv, g, tmp, fz, blk, scales, trial, eta):
         grow_scales(tmp, blk, trial)
         dnorm = 0.0
         for i in range(n):
-            dnorm = max(dnorm, ratio(abs(g[i]), trial[blk[i]]))
+            dnorm = worst(dnorm, ratio(abs(g[i]), trial[blk[i]]))
             z[i] += g[i]
         state, theta, eta = verdict(it, dnorm, norm_old, eta)
         if state != GOING:

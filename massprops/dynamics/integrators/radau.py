@@ -60,6 +60,7 @@ from massprops.dynamics.integrators._shared import (
     start_scales,
     step_count,
     too_small,
+    worst,
 )
 from massprops.dynamics.integrators.base import (
     NFEV,
@@ -229,7 +230,7 @@ def _newton(y, h, z, fz, prog, stage, lr, pr, lc, pc, big, pb, rr, rc, dz, js, t
         dnorm = 0.0
         for s in range(3):
             for i in range(n):
-                dnorm = max(dnorm, ratio(abs(dz[s * n + i]), trial[blk[i]]))
+                dnorm = worst(dnorm, ratio(abs(dz[s * n + i]), trial[blk[i]]))
                 z[s, i] += dz[s * n + i]
         state, theta, eta = verdict(it, dnorm, norm_old, eta)
         if stage and state != CONVERGED and refreshes < STAGE_REFRESHES \

@@ -256,10 +256,12 @@ def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: 
     """The exception of a kernel's failure ``status`` at fstats[3] (see systems_dop853)."""
     t, source = float(fstats[3]), system.scene.source
     fewer = _fewer(method)
-    wild = (f"{source}: the {method} run diverged at t = {t:.6g} s: its step is beyond the "
-            f"method's stability there; "
-            + (f"shorten {setting_ref('step')} or " if method != "dop853" else "")
-            + f"run the implicit method ({setting_ref('integrator')})")
+    wild = (f"{source}: the {method} run diverged at t = {t:.6g} s: "
+            + (f"its Newton iterations ran away; shorten {setting_ref('step')}"
+               if method == "implicit" else
+               "its step is beyond the method's stability there; "
+               + (f"shorten {setting_ref('step')} or " if method != "dop853" else "")
+               + f"run the implicit method ({setting_ref('integrator')})"))
     if status == codes.UNDERFLOW:
         if method != "dop853":  # the fixed-step kernels' Newton failed in MAX_PIECES pieces
             return ArithmeticError(f"{source}: {method}'s Newton iterations failed at "
