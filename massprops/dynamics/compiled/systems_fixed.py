@@ -80,13 +80,13 @@ NEWTON_FAILED = -1
 """Internal status of a step whose Newton iterations failed (then cut into pieces)."""
 
 RADAU_C = np.array([RADAU_A[0].sum(), RADAU_A[1].sum(), 1.0])
+"""(3,) Radau IIA's nodes (the row sums of A)."""
 
 LEVEL, STREAK, STAGE, CALM, RETRY, TRYING = range(6)
 MODE_SIZE = 6
 """The step loop's memory across steps (``scratch``'s last array): pieces per step 2^LEVEL and
 the clean steps at that level; Radau's stage-Jacobian mode, the steps taken in it, the steps
 it lasts (RETRY) and whether the one-Jacobian iteration is on trial again."""
-"""(3,) Radau IIA's nodes (the row sums of A)."""
 
 
 @inlined
