@@ -37,6 +37,14 @@ def in_background(fn: Callable[..., _T], *args) -> Callable[[], _T]:
     return result
 
 
+def beside(progress: Callable[[float], None], side) -> Callable[[float], None]:
+    """The progress callback of a main run with work ``side`` beside it (anything with a
+    ``fraction``, e.g. a `CancellableJob`; None: none): the mean of the two fractions."""
+    if side is None:
+        return progress
+    return lambda fraction: progress(0.5 * fraction + 0.5 * side.fraction)
+
+
 def in_halves(fn: Callable[[int, int], _T], n: int, align: int) -> list[_T]:
     """[fn(0, mid), fn(mid, n)], the first half on a helper thread, mid a multiple of ``align``
     (the caller's block size); a pass shorter than two blocks runs here in one piece."""

@@ -49,7 +49,7 @@ from massprops.dynamics.model import Scene
 from massprops.dynamics.program import compile_forces
 from massprops.dynamics.runner import RawRun, run_once, stability_hint
 from massprops.errors import ComputationError, DivergenceError, RunBudgetError, UsageError
-from massprops.parallel import CancellableJob
+from massprops.parallel import CancellableJob, beside
 from massprops.rotation import canonical, matrix_to_quat, quat_multiply, quat_to_matrix
 
 SYSTEM_METHODS = ("dop853", "rk4", "midpoint", "implicit")
@@ -187,7 +187,7 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
                    ) -> SimulationResult:
     """The main run, its diagnostics and divergence checks, then the error estimate from the
     companion runs of ``side`` (running meanwhile on another thread; None for closed forms)."""
-    main_progress = None if progress is None else _joint_progress(progress, side)
+    main_progress = None if progress is None else beside(progress, side)
     run = run_once(scene, program, spec, setting, t_out, main_progress, max_steps)
     conservative = is_conservative(program)
     traj = to_world(scene, run.t, run.y, program, with_energy=conservative
@@ -201,11 +201,8 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
         diagnostics=diagnostics, interrupted=run.interrupted)
     onset = _energy_blowup(traj, floor)  # only scenes that cannot gain energy carry an energy
     if onset is not None:  # name when it started, even if the state overflowed only later
-        later = f" ({run.failure.what})" if run.failure else ""
-        raise DivergenceError(
-            f"{scene.source}: {name} diverged near t = {onset:.6g} s: the energy grew by more "
-            f"than {ENERGY_BLOWUP:.0e} times its initial value{later}; "
-            + stability_hint(program, setting, name), partial=result)
+        raise _blowup(scene, program, name, setting, onset, result,
+                      f" ({run.failure.what})" if run.failure else "")
     if run.failure is not None and run.exhausted:
         raise RunBudgetError(f"{scene.source}: {run.failure}", partial=result)
     if run.failure is not None:
@@ -262,12 +259,13 @@ def _as_system(scene: Scene, program: ForceProgram, spec, name: str, reason: str
 
 
 def _blowup(scene: Scene, program: ForceProgram, name: str, setting: float, onset: float,
-            partial: SimulationResult) -> DivergenceError:
-    """The divergence of a run whose energy grew ENERGY_BLOWUP-fold from ``onset`` (s)."""
+            partial: SimulationResult, later: str = "") -> DivergenceError:
+    """The divergence of a run whose energy grew ENERGY_BLOWUP-fold from ``onset`` (s);
+    ``later``: what then stopped the run, if anything did."""
     return DivergenceError(
         f"{scene.source}: {name} diverged near t = {onset:.6g} s: the energy grew by more than "
-        f"{ENERGY_BLOWUP:.0e} times its initial value; " + stability_hint(program, setting, name),
-        partial=partial)
+        f"{ENERGY_BLOWUP:.0e} times its initial value{later}; "
+        + stability_hint(program, setting, name), partial=partial)
 
 
 def _one_body_result(scene: Scene, program: ForceProgram, run, name: str, reason: str,
@@ -334,15 +332,6 @@ def _start_companions(scene: Scene, program: ForceProgram, spec, setting: float,
         return runs
 
     return CancellableJob(companions)
-
-
-def _joint_progress(progress: Callable[[float], None], side: CancellableJob | None
-                    ) -> Callable[[float], None]:
-    """The main run's progress callback: the mean of the main run's and the companions'
-    fractions (called on this thread only, between the main run's chunks)."""
-    if side is None:
-        return progress
-    return lambda fraction: progress(0.5 * fraction + 0.5 * side.fraction)
 
 
 def _companion_runs(side: CancellableJob, progress: Callable[[float], None] | None

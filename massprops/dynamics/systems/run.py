@@ -39,6 +39,7 @@ from massprops.errors import (
     UsageError,
     setting_ref,
 )
+from massprops.parallel import beside
 from massprops.rotation import quat_to_matrix
 
 
@@ -197,7 +198,7 @@ def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, star
             progress, interruptible) -> SystemResult:
     """`simulate_system` from the main run on, its companions running beside it (``side``)."""
     run = integrate(system, y0, t_out, setting, floors, _windows(scene), limit, name,
-                    None if progress is None else _joint_progress(progress, side))
+                    None if progress is None else beside(progress, side))
     wall = time.perf_counter() - start
     system.margin = run.margin
     if run.interrupted and not interruptible:
@@ -270,13 +271,6 @@ def _partial(system: System, t_out: np.ndarray, run, wall: float, notes: list, n
     diagnostics = {"energy_rel_drift": None, "error_estimate": None}
     return SystemResult(samples, run.steps, run.nfev, run.rejected, wall, diagnostics,
                         system.scene, tuple(notes), None, name, reason)
-
-
-def _joint_progress(progress: Callable[[float], None], side) -> Callable[[float], None]:
-    """The main run's progress: the mean of its fraction and its companions' (as one body's)."""
-    if side is None:
-        return progress
-    return lambda fraction: progress(0.5 * fraction + 0.5 * side.fraction)
 
 
 def _reached(run, t_out: np.ndarray) -> np.ndarray:
