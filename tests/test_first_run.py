@@ -131,14 +131,15 @@ def test_a_held_body_in_closed_form_needs_no_compiler(tmp_path):
 @pytest.mark.timeout(300)
 def test_kernels_built_with_the_package_load_without_compiling_wherever_it_is_installed(
         tmp_path, run):
-    """What setup.py does to a wheel: the kernels compiled in the build folder, then the package
-    moved to another absolute path (site-packages), and a first run with massprops' own cache
-    folder in a fresh home: it loads them (numba compiles nothing, so nothing is said) and
-    gives the same motion as this process's own kernel."""
+    """What setup.py does to a wheel: the kernels compiled in the build folder (into the
+    builder's cache), then the package moved to another absolute path (site-packages), and a
+    first run with massprops' own cache folder in a fresh home: it loads them (numba compiles
+    nothing, so nothing is said) and gives the same motion as this process's own kernel."""
     ignore = shutil.ignore_patterns("__pycache__", "_prebuilt")
     shutil.copytree(ROOT / "massprops", tmp_path / "build" / "massprops", ignore=ignore)
     env = dict(os.environ, PYTHONPATH=str(tmp_path / "build"),
-               NUMBA_CACHE_DIR=str(tmp_path / "scratch"))
+               XDG_CACHE_HOME=str(tmp_path / "builder"))
+    env.pop("NUMBA_CACHE_DIR", None)
     subprocess.run([sys.executable, "-m", "massprops.dynamics.compiled.build", "--only",
                     "splitting"],
                    cwd=tmp_path, env=env, check=True, capture_output=True, timeout=240)
@@ -154,16 +155,38 @@ def test_kernels_built_with_the_package_load_without_compiling_wherever_it_is_in
     assert probe["exit"] == 0 and probe["numba"] is True
     assert errors == []  # loaded: numba compiled nothing
     (cache,) = (tmp_path / "home" / "massprops").iterdir()
-    assert len(list(cache.glob(".prebuilt-seeded-*"))) == 1
+    assert (cache / ".prebuilt-seeded").exists()
     here = run("simulate", scene, "--json", "-q")
     assert json.loads(stdout)["final"] == json.loads(here.stdout)["final"]
-    # a second copy of the same version (another venv) in the same home: its own kernels are
-    # seeded too (numba keys each copy's by its path), not compiled again
-    shutil.copytree(tmp_path / "build" / "massprops", tmp_path / "site2" / "massprops")
+    # a second copy of the same sources (another venv, a checkout) in the same home shares the
+    # seeded kernels: nothing compiled, nothing more copied
+    files = sorted(cache.rglob("*"))
+    shutil.copytree(tmp_path / "build" / "massprops", tmp_path / "site2" / "massprops",
+                    ignore=ignore)
     env["PYTHONPATH"] = str(tmp_path / "site2")
     stdout2, errors2, probe2 = fresh_process(None, "simulate", scene, "--json", "-q", env=env,
                                              cwd=tmp_path)
     assert probe2["file"].startswith(str(tmp_path / "site2")) and probe2["exit"] == 0
     assert errors2 == []  # loaded: numba compiled nothing
-    assert len(list(cache.glob(".prebuilt-seeded-*"))) == 2
+    assert sorted(cache.rglob("*")) == files
     assert json.loads(stdout2)["final"] == json.loads(stdout)["final"]
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(300)
+def test_building_the_same_sources_again_loads_the_kernels_from_the_builders_cache(tmp_path):
+    """A second build of the same sources (the test extra's install after the plain one) takes
+    its kernels from the builder's cache: numba compiles nothing the second time."""
+    env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "builder"))
+    env.pop("NUMBA_CACHE_DIR", None)
+    counts = []
+    for build in ("first", "second"):
+        ignore = shutil.ignore_patterns("__pycache__", "_prebuilt")
+        shutil.copytree(ROOT / "massprops", tmp_path / build / "massprops", ignore=ignore)
+        env["PYTHONPATH"] = str(tmp_path / build)
+        code = ("from massprops.dynamics.compiled.compiling import ready_side_by_side\n"
+                "print(ready_side_by_side(['splitting'], jobs=1))")
+        out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, check=True,
+                             capture_output=True, text=True, timeout=240)
+        counts.append(int(out.stdout.split()[-1]))
+    assert counts[0] > 0 and counts[1] == 0

@@ -25,10 +25,6 @@ from massprops.dynamics.systems.one_body import BODY, as_system
 from massprops.dynamics.systems.run import simulate_system
 from massprops.rotation import quat_to_matrix, rotation_angle_between
 
-# the first test in a process may compile the systems kernel (~2 min from an empty cache), which
-# the suite's 120 s per test would not leave room for (conftest.COMPILING_TIMEOUT_S)
-pytestmark = pytest.mark.timeout(300)
-
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "sample_scenes"
 MESHES = ROOT / "sample_meshes"

@@ -3,14 +3,22 @@
 numba checks a cached kernel only against its own source file, so a kernel that calls a changed
 function in another file (``forces.rhs``) would keep running stale machine code after an edit or
 an upgrade. massprops' kernels therefore cache in a folder keyed by a hash of the dynamics
-package's sources, ``$XDG_CACHE_HOME/massprops/numba-<hash>/`` (``~/.cache`` by default), or
-under the NUMBA_CACHE_DIR the user set, by numba's own rule. Only massprops' kernels use it:
-their decorators (`jit`) give each one a `KernelCache`, whose locator knows that folder. numba's
-config and the environment are never changed, so a user's own numba functions cache where numba
-puts them.
+package's sources and of the Python, numba and numpy they run with:
+``<base>/massprops/numba-<hash>/``, where the base is the NUMBA_CACHE_DIR the user set, else
+``$XDG_CACHE_HOME`` (``~/.cache`` by default). Only massprops' kernels use it: their decorators
+(`jit`) give each one a `KernelCache`, whose locator knows that folder. numba's config and the
+environment are never changed, so a user's own numba functions cache where numba puts them.
+
+Inside the folder a kernel's files are named by its source's place in the package
+(``dynamics/compiled``), not by the absolute path numba's own locators hash: the folder's name
+already fixes every source's content, and numba still checks each entry against its source
+file's content hash, its bytecode and this CPU. So every copy of the same sources shares one set
+of kernels: the build folder (setup.py compiles into this cache, so a second install of the same
+sources loads instead of compiling), the installed package, a source checkout running its
+tests, a second virtual environment.
 
 Nothing is written on import. The first time a kernel is loaded or compiled, `cache_root` makes
-the folder (a per-user temporary one if the home cannot be written), marks it as used, removes
+the folder (a per-user temporary one if the base cannot be written), marks it as used, removes
 folders of other sources unused for `UNUSED_CACHE_DAYS`, and copies in the kernels shipped with
 the package (`prebuilt.seed`).
 """
@@ -48,10 +56,20 @@ UNUSED_CACHE_DAYS = 30
 """A cache folder of other sources (an older version, another checkout) not used for this many
 days is removed when a new one is made: each holds ~8 MB, and every upgrade makes one."""
 
+PACKAGE = DYNAMICS.parent
+"""The `massprops` package: a kernel's files are named by its source's folder relative to it."""
+
 
 @functools.cache
-def _digest() -> str:
-    digest = hashlib.sha256(sys.version.encode())
+def digest() -> str:
+    """The hash that names the kernels' folder: the dynamics sources that kernels compile (their
+    paths in the package and their bytes), the Python, and the numba and numpy versions (numba's
+    index checks its own version; numpy's is checked here, for its ABI)."""
+    import numba
+    import numpy
+
+    versions = (sys.version, numba.__version__, numpy.__version__.rsplit(".", 1)[0])
+    digest = hashlib.sha256(repr(versions).encode())
     for path in sorted(DYNAMICS.rglob("*.py")):
         if path.relative_to(DYNAMICS).parts[0] in NOT_COMPILED:
             continue
@@ -61,12 +79,15 @@ def _digest() -> str:
 
 
 def planned_root() -> Path:
-    """The folder the kernels will cache in (nothing is created): the user's NUMBA_CACHE_DIR as
-    numba reads it, else massprops' own folder for these sources."""
-    if config.CACHE_DIR:
-        return Path(config.CACHE_DIR)
-    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "massprops" / f"numba-{_digest()}"
+    """The folder the kernels will cache in (nothing is created; see the module doc)."""
+    base = config.CACHE_DIR or os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "massprops" / f"numba-{digest()}"
+
+
+def kernel_subpath(py_file: str) -> str:
+    """The folder, inside the cache folder, of the kernels defined in ``py_file``: its folder
+    relative to the package (``dynamics/compiled``); the same for every copy of the package."""
+    return Path(py_file).resolve().parent.relative_to(PACKAGE).as_posix()
 
 
 _settle_lock = threading.Lock()
@@ -74,12 +95,9 @@ _settle_lock = threading.Lock()
 
 @functools.cache
 def cache_root() -> Path:
-    """The folder, made ready for use (see the module doc); called on the first load or compile.
-    A NUMBA_CACHE_DIR the user chose is used as it is: not seeded, not pruned."""
+    """The folder, made ready for use (see the module doc); called on the first load or compile."""
     with _settle_lock:
         target = planned_root()
-        if config.CACHE_DIR:
-            return target
         try:
             fresh = not target.is_dir()
             target.mkdir(parents=True, exist_ok=True)
@@ -87,9 +105,9 @@ def cache_root() -> Path:
             if fresh:
                 _prune_unused(target.parent, keep=target)
         except OSError:  # read-only home: a per-user temporary folder still caches within a boot
-            target = Path(tempfile.gettempdir()) / f"massprops-numba-{_digest()}"
+            target = Path(tempfile.gettempdir()) / f"massprops-numba-{digest()}"
             target.mkdir(parents=True, exist_ok=True)
-        seed(target)
+        seed(target, digest())
         return target
 
 
@@ -101,13 +119,14 @@ def _prune_unused(parent: Path, keep: Path) -> None:
 
 
 class _KernelLocator(_SourceFileBackedLocatorMixin, _CacheLocator):
-    """numba's locator protocol for massprops' kernels: the source file's stamp as numba's own
-    locators take it, the folder under `planned_root` until `cache_root` settles it."""
+    """numba's locator protocol for massprops' kernels: the source file's stamp (its content
+    hash) as numba's own locators take it, the folder `kernel_subpath` under `planned_root` until
+    `cache_root` settles it."""
 
     def __init__(self, py_func, py_file):
         self._py_file = py_file
         self._lineno = py_func.__code__.co_firstlineno
-        self._subpath = self.get_suitable_cache_subpath(py_file)
+        self._subpath = kernel_subpath(py_file)
         self._cache_path = str(planned_root() / self._subpath)
 
     def get_cache_path(self):

@@ -217,12 +217,16 @@ def _wall_estimate(kernels: list[str], helper: list[str]) -> float:
     return max(_estimate([k for k in kernels if k not in helper]), _estimate(helper))
 
 
-def _spawn(kernels: list[str]) -> subprocess.Popen | None:
-    """A helper process compiling ``kernels`` into the same cache (None if it cannot start)."""
+def _helper_command(kernels: Sequence[str]) -> list[str]:
     code = ("import sys; from massprops.dynamics.compiled.compiling import helper_main; "
             "helper_main(sys.argv[1:])")
+    return [sys.executable, "-c", code, *kernels]
+
+
+def _spawn(kernels: list[str]) -> subprocess.Popen | None:
+    """A helper process compiling ``kernels`` into the same cache (None if it cannot start)."""
     try:
-        return subprocess.Popen([sys.executable, "-c", code, *kernels], env=os.environ.copy(),
+        return subprocess.Popen(_helper_command(kernels), env=os.environ.copy(),
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL)
     except OSError:
@@ -230,10 +234,53 @@ def _spawn(kernels: list[str]) -> subprocess.Popen | None:
 
 
 def helper_main(kernels: list[str]) -> None:
-    """The helper process: load or compile ``kernels`` into the shared cache, then exit."""
+    """The helper process: load or compile ``kernels`` into the shared cache, then print how many
+    functions numba compiled (0: everything came from the cache) and exit."""
     # deferred: the registry imports the kernels' modules; needed only when preparing them
+    from numba.core import event
+
     from massprops.dynamics.compiled.jit import start_numba_lean
 
     start_numba_lean()
-    for name in kernels:
-        warm_up(name)
+    compiled = 0
+
+    class Counter(event.Listener):
+        def on_start(self, ev) -> None:
+            nonlocal compiled
+            compiled += 1
+
+        def on_end(self, ev) -> None:
+            """Counted at the start."""
+
+    with event.install_listener("numba:compile", Counter()):
+        for name in kernels:
+            warm_up(name)
+    print(compiled)
+
+
+def ready_side_by_side(names: Sequence[str] | None = None, jobs: int = 2,
+                       timeout: float = 1800.0, env: dict | None = None) -> int:
+    """Load or compile the kernels of the integrators ``names`` (default: every stepping one and
+    the systems' kernel) into the cache, in ``jobs`` fresh processes side by side (one kernel is
+    one process's work); returns the number of functions numba compiled (0: all were cached).
+    The build step and the test suite's start use it; a run uses `prepare`.
+    Raises RuntimeError when a process fails or takes longer than ``timeout`` seconds."""
+    # deferred: the registry imports the kernels' modules; needed only when preparing them
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    kernels = compiled_names(names or [*INTEGRATORS, SYSTEMS])
+    procs = [subprocess.Popen(_helper_command(share), env=env, stdin=subprocess.DEVNULL,
+                              stdout=subprocess.PIPE, text=True)
+             for share in balanced(kernels, jobs) if share]
+    try:
+        outs = [proc.communicate(timeout=timeout)[0] for proc in procs]
+    except subprocess.TimeoutExpired as exc:
+        raise RuntimeError(f"compiling the kernels took over {timeout:.0f} s") from exc
+    finally:
+        for proc in procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    if any(proc.returncode != 0 for proc in procs):
+        raise RuntimeError("compiling a kernel failed (its error is above)")
+    return sum(int(out.split()[-1]) for out in outs)
