@@ -632,7 +632,7 @@ def test_permission_denied(tmp_path, monkeypatch):
     def denied(*args, **kwargs):
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr("massprops.io.source.open", denied, raising=False)
+    monkeypatch.setattr("massprops.files.open", denied, raising=False)
     with pytest.raises(MeshFileError, match="permission denied") as caught:
         read_mesh(tmp_path / "locked.obj")
     assert str(caught.value).startswith(str(tmp_path / "locked.obj"))

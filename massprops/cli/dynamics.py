@@ -236,16 +236,9 @@ def _one_body_duration(scene: Any, scene_path: str, duration: float) -> Any:
 
 def _is_system(scene_path: str) -> bool:
     # deferred: start-up cost
-    from massprops.dynamics.systems.robot_scene import is_description
-    from massprops.dynamics.systems.scene import is_system_text
+    from massprops.dynamics.systems.robot_scene import is_system_file
 
-    if is_description(scene_path):
-        return True
-    try:
-        with open(scene_path, encoding="utf-8-sig") as handle:
-            return is_system_text(handle.read())
-    except (OSError, UnicodeDecodeError):  # the one-body reader reports it
-        return False
+    return is_system_file(scene_path)
 
 
 def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,

@@ -18,8 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.errors import MeshFormatError
+from massprops.files import open_input, read_error
 from massprops.io import validate
-from massprops.io.source import Source, read_error
+from massprops.io.source import Source
 from massprops.mesh.value import Mesh, fan_triangulate
 
 _SURFACE_CELLS = ("triangle", "quad", "polygon")
@@ -166,11 +167,11 @@ def _local_path(source: Source, extension: str) -> Iterator[str]:
 
 def _require_readable(source: Source) -> None:
     """The same MeshFileError/MeshFormatError as the own readers for missing or empty files."""
-    try:
-        with open(source.path, "rb") as f:  # type: ignore[arg-type]
+    with open_input(source.path, name=source.name) as f:  # type: ignore[arg-type]
+        try:
             empty = not f.read(1)
-    except OSError as exc:
-        raise read_error(source.name, exc) from exc
+        except OSError as exc:
+            raise read_error(source.name, exc) from exc
     if empty:
         raise MeshFormatError(f"{source.name}: the file is empty; expected a mesh")
 

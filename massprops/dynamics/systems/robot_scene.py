@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from massprops.dynamics.model import OutputSettings, TimeSettings
-from massprops.dynamics.scene import _output
+from massprops.dynamics.scene import _output, scene_text
 from massprops.dynamics.systems.description import (
     BASES,
     INERTIALS,
@@ -37,15 +37,17 @@ from massprops.dynamics.systems.model import SystemInitial, SystemScene
 from massprops.dynamics.systems.scene import (
     _forces,
     _initial,
+    is_system_text,
     parse_system,
     system_time,
     with_time,
 )
 from massprops.dynamics.yamlnodes import Field, compose, read_choice, read_mapping, read_string
 from massprops.errors import SceneError
+from massprops.files import file_problem
 
-__all__ = ["DESCRIPTION_SUFFIXES", "description_scene", "is_description", "load_any_system",
-           "parse_model_scene"]
+__all__ = ["DESCRIPTION_SUFFIXES", "description_scene", "is_description", "is_system_file",
+           "load_any_system", "parse_model_scene"]
 
 DESCRIPTION_SUFFIXES = (".urdf", ".sdf", ".xml", ".xacro")
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
@@ -57,6 +59,18 @@ def is_description(path: str | os.PathLike) -> bool:
     return Path(path).suffix.lower() in DESCRIPTION_SUFFIXES
 
 
+def is_system_file(path: str | os.PathLike) -> bool:
+    """True for a file the systems package runs: a robot description (by its name) or a scene
+    with ``bodies:`` or ``model:``. False too when the file cannot be read: the one-body reader
+    then says why, in one line."""
+    if is_description(path):
+        return True
+    try:
+        return is_system_text(scene_text(path))
+    except SceneError:
+        return False
+
+
 def load_any_system(path: str | os.PathLike, duration: float | None = None) -> SystemScene:
     """A system scene file (``bodies:`` or ``model:``) or a robot description
     (`description_scene`), with its duration set to ``duration`` s where given (a
@@ -64,10 +78,7 @@ def load_any_system(path: str | os.PathLike, duration: float | None = None) -> S
     if is_description(path):
         return description_scene(path, duration=1.0 if duration is None else duration)
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read the scene file: {exc.strerror}") from exc
+    text = scene_text(path)
     if any(line.startswith("model:") for line in text.splitlines()):
         scene = parse_model_scene(text, source=os.fspath(path), base_dir=path.parent)
     else:
@@ -81,8 +92,9 @@ def parse_model_scene(text: str, *, source: str, base_dir: Path) -> SystemScene:
     fields = read_mapping(Field(root, "", source), _KEYS,
                           {"model": "model: arm.urdf", "time": "time: {duration: 2.0}"})
     file = base_dir / read_string(fields["model"], "a URDF, SDF or MJCF file name")
-    if not file.is_file():
-        raise fields["model"].error(f"no such file {file} (relative paths start at the scene "
+    problem = file_problem(file)
+    if problem is not None:
+        raise fields["model"].error(f"{file} {problem} (relative paths start at the scene "
                                     "file's folder)")
     inertials = (read_choice(fields["inertials"], INERTIALS, "inertials")
                  if "inertials" in fields else "stated")

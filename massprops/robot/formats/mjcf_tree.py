@@ -62,11 +62,13 @@ def expand_includes(root: Node, main: Path, _chain: tuple[Path, ...] = ()) -> No
 
 
 def _locate(file: str, main: Path, including: Path) -> Path | None:
+    """Where ``file`` is: absolute, or in the main model's folder, else the including file's;
+    None if nowhere (something there that is not a regular file: parse_xml refuses it)."""
     p = Path(file)
     if p.is_absolute():
-        return p if p.is_file() else None
+        return p if p.exists() else None
     for folder in (main.parent, including.parent):
-        if (folder / p).is_file():
+        if (folder / p).exists():
             return folder / p
     return None
 
