@@ -241,3 +241,55 @@ def test_unit_choices_are_the_readers_units():
 ], ids=["input", "usage", "computation", "os-error", "bug", "interrupt"])
 def test_exit_code_table(exc, code):
     assert exit_code(exc) == code
+
+
+# --- no numpy warning on stderr (issue 30) --------------------------------------------------------
+def _scaled_cube(path, scale: float):
+    lines = [f"v {x * scale!r} {y * scale!r} {z * scale!r}"
+             for x, y, z in ((i & 1, (i >> 1) & 1, (i >> 2) & 1) for i in range(8))]
+    lines += ["f " + " ".join(str(i + 1) for i in q) for q in CUBE_QUADS]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("scale", [1e300, 1e200])
+def test_coordinates_too_large_exit_1_in_one_line(tmp_path, scale):
+    """A real process: numpy's RuntimeWarnings went to stderr (12 lines) before exit 3."""
+    cube = _scaled_cube(tmp_path / "big.obj", scale)
+    cmd = [sys.executable, "-m", "massprops", "inspect", "--json", str(cube)]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 1 and out.stdout == ""
+    assert out.stderr == (
+        f"massprops: error: {cube}: coordinates too large for float64 mass properties: vertex 2 "
+        f"has |x| = {scale:.3g} m, but the inertia integrates coordinates to the fifth power, "
+        "finite only for |x| below 6e+60 m (12 triangles); rescale the mesh or give the unit its "
+        "coordinates are in (--unit)\n")
+
+
+def test_density_beyond_float64_exit_1_in_one_line(tmp_path):
+    cube = _scaled_cube(tmp_path / "big.obj", 1e60)
+    cmd = [sys.executable, "-m", "massprops", "inspect", "--density", "1e300", str(cube)]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 1 and out.stdout == ""
+    lines = out.stderr.splitlines()
+    assert len(lines) == 1 and "mass properties beyond float64's range" in lines[0], out.stderr
+
+
+@pytest.mark.parametrize("debug", [False, True])
+def test_a_stray_warning_never_reaches_stderr_without_debug(run, monkeypatch, recwarn, debug):
+    import warnings
+
+    import massprops.inspection.file as inspection
+
+    real = inspection.read_mesh
+
+    def warning_read(*args, **kwargs):
+        warnings.warn("overflow encountered in multiply", RuntimeWarning, stacklevel=1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(inspection, "read_mesh", warning_read)
+    res = run(*(["--debug"] if debug else []), "inspect", "--json", "--jobs", "1",
+              SAMPLES / "cube.obj")
+    assert res.exit_code == 0 and res.stderr == ""
+    assert [str(w.message) for w in recwarn] == (
+        ["overflow encountered in multiply"] if debug else [])

@@ -165,7 +165,7 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
     results = []
     for k, (solid, integral, rho) in enumerate(zip(cad.solids, integrals, densities)):
         props = properties_from_moments(integral.origin, integral.moments, density=rho,
-                                        mass=None)
+                                        mass=None, name=f"{cad.name}: {solid.name}")
         repairs = None
         if shells:
             bar, record = shells[k]

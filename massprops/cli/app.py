@@ -3,8 +3,11 @@ a fast exit)."""
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import sys
+import warnings
+from collections.abc import Iterator
 
 import click
 
@@ -21,6 +24,17 @@ def cli(ctx: click.Context, debug: bool) -> None:
     """Mass properties and rigid-body dynamics of closed meshes (SI units)."""
     ctx.ensure_object(dict)
     ctx.obj["debug"] = debug
+    if not debug:  # stderr carries one line per problem: a stray warning (a bug, to be fixed
+        # at its cause) is no noise of the user's; --debug shows them with the tracebacks
+        ctx.with_resource(_without_warnings())
+
+
+@contextlib.contextmanager
+def _without_warnings() -> Iterator[None]:
+    """Python's warnings ignored while the command runs (restored after: tests run in-process)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        yield
 
 
 def main(argv: list[str] | None = None) -> None:
