@@ -293,3 +293,22 @@ def test_a_stray_warning_never_reaches_stderr_without_debug(run, monkeypatch, re
     assert res.exit_code == 0 and res.stderr == ""
     assert [str(w.message) for w in recwarn] == (
         ["overflow encountered in multiply"] if debug else [])
+
+
+# --- a bad --input-format is a usage error (issue 30) ---------------------------------------------
+@pytest.mark.parametrize("command", ["inspect", "align"])
+def test_unknown_input_format_is_a_usage_error_listing_the_formats(run, tmp_path, command):
+    from massprops.io import input_formats
+
+    args = [SAMPLES / "cube.obj"] + ([tmp_path / "out.obj"] if command == "align" else [])
+    res = run(command, *args, "--input-format", "bogus")
+    assert res.exit_code == 2 and res.stdout == ""
+    assert res.stderr.splitlines()[-1] == (
+        f"Error: Invalid value for '--input-format': 'bogus' is not one of "
+        f"{', '.join(input_formats())}")
+    assert not (tmp_path / "out.obj").exists()
+
+
+def test_input_format_is_case_insensitive_with_a_dot(run):
+    res = run("inspect", "--json", "--input-format", ".OBJ", SAMPLES / "cube.obj")
+    assert res.exit_code == 0 and json_lines(res.stdout)[0]["volume"] == pytest.approx(1.0)

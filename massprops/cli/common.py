@@ -9,7 +9,7 @@ import json
 import os
 import re
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import click
@@ -114,6 +114,44 @@ def emit_json(obj: dict) -> None:
     click.echo(text)
 
 
+class RegistryChoice(click.ParamType):
+    """A choice whose values come from a registry, loaded on first use, so that building the
+    command line never imports what only one command needs (numba for the integrators, the
+    readers for the formats). ``normalize`` turns a value into the registry's key (formats:
+    case-insensitive, a leading dot allowed). A value not in the registry is a usage error
+    (exit 2) listing the registry's values."""
+
+    name = "choice"
+
+    def __init__(self, loader: Callable[[], Sequence[str]],
+                 normalize: Callable[[str], str] | None = None) -> None:
+        self.loader, self.normalize = loader, normalize
+
+    def get_metavar(self, *args: Any, **kwargs: Any) -> str:
+        return "[" + "|".join(self.loader()) + "]"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> str:
+        choices = self.loader()
+        key = value if self.normalize is None else self.normalize(value)
+        if key not in choices:
+            self.fail(f"{value!r} is not one of {', '.join(choices)}", param, ctx)
+        return key
+
+
+def _input_formats() -> list[str]:
+    # deferred: the readers' registry, only when --input-format is given
+    from massprops.io import input_formats
+
+    return input_formats()
+
+
+def _format_key(name: str) -> str:
+    # deferred: the readers' registry, only when --input-format is given
+    from massprops.io.registry import format_key
+
+    return format_key(name)
+
+
 def positive(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
     import math
 
@@ -152,8 +190,10 @@ def mass_options(f: Callable) -> Callable:
         click.option("--allow-open", is_flag=True,
                      help="Compute an open mesh anyway (the result is then ill-defined; "
                           "warnings say by how much)."),
-        click.option("--input-format", default=None,
-                     help="Format of the input (required for '-' = standard input)."),
+        click.option("--input-format", default=None, metavar="FORMAT",
+                     type=RegistryChoice(_input_formats, _format_key),
+                     help="Format of the input, a name of the formats massprops reads (obj, "
+                          "stl, ply, ...; required for '-' = standard input)."),
         *_repair_flags(),
     ]):
         f = opt(f)

@@ -3,33 +3,21 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
 from typing import Any
 
 import click
 
 from massprops.cli.app import cli
-from massprops.cli.common import emit_json, guarded, positive, say_note, say_notes, say_warning
+from massprops.cli.common import (
+    RegistryChoice,
+    emit_json,
+    guarded,
+    positive,
+    say_note,
+    say_notes,
+    say_warning,
+)
 from massprops.errors import ComputationError
-
-
-class RegistryChoice(click.ParamType):
-    """A choice whose values come from a registry, loaded on first use, so that building the
-    command line never imports what only one command needs (numba for the integrators)."""
-
-    name = "choice"
-
-    def __init__(self, loader: Callable[[], tuple[str, ...]]) -> None:
-        self.loader = loader
-
-    def get_metavar(self, *args: Any, **kwargs: Any) -> str:
-        return "[" + "|".join(self.loader()) + "]"
-
-    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> str:
-        choices = self.loader()
-        if value not in choices:
-            self.fail(f"{value!r} is not one of {', '.join(choices)}", param, ctx)
-        return value
 
 
 def _integrator_names() -> tuple[str, ...]:

@@ -91,9 +91,14 @@ def output_formats() -> list[str]:
     return sorted(name for name, fmt in FORMATS.items() if fmt.can_write)
 
 
+def format_key(name: str) -> str:
+    """The key of ``FORMATS`` that ``name`` means: case-insensitive, a leading dot allowed."""
+    return name.lower().lstrip(".")
+
+
 def format_named(name: str) -> Format:
-    """The format called ``name`` (case-insensitive, a leading dot allowed)."""
-    key = name.lower().lstrip(".")
+    """The format called ``name`` (`format_key`)."""
+    key = format_key(name)
     if key not in FORMATS:
         raise UnknownFormatError(
             f"unknown format {name!r}; expected one of: {', '.join(sorted(FORMATS))}"
