@@ -785,7 +785,7 @@ def test_atomic_write_bytes_for_other_outputs(tmp_path):
 
 
 def test_write_errors(tmp_path):
-    with pytest.raises(UnknownFormatError, match=".obj"):
+    with pytest.raises(UsageError, match=r"a.vtk: cannot write a mesh as '.vtk'; expected .*\.obj"):
         write_mesh(cube(), tmp_path / "a.vtk")
     with pytest.raises(MeshFileError, match="does not exist"):
         write_mesh(cube(), tmp_path / "missing" / "a.obj")

@@ -152,6 +152,21 @@ def _format_key(name: str) -> str:
     return format_key(name)
 
 
+def check_outputs(outputs: Sequence[tuple[str | None, Any]], *, force: bool,
+                  inputs: Sequence[str]) -> None:
+    """The output rule (`massprops.io.atomic`: an extension the command can write, no input,
+    not existing without --force, a writable folder) for every (path, `OutputKind`) a command
+    will write, before any work; a path None is not asked for. No output may be another."""
+    # deferred: only a command that writes files needs the rule
+    from massprops.io.atomic import check_output
+
+    written: list[str] = []
+    for path, kind in outputs:
+        if path:
+            check_output(path, kind, force=force, protect=[*inputs, *written])
+            written.append(path)
+
+
 def positive(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
     import math
 

@@ -10,6 +10,7 @@ import click
 from massprops.cli.app import cli
 from massprops.cli.common import (
     RegistryChoice,
+    check_outputs,
     emit_json,
     guarded,
     positive,
@@ -89,6 +90,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         # deferred: each command imports only what it runs (start-up of the others)
         from massprops.dynamics.compiled.compiling import whole_process
 
+        _check_run_outputs(output_path, plot_path, force, [scene_path])
         if plot_path:
             # deferred: matplotlib (the plot extra) loads only for --plot
             from massprops.dynamics.plots import require_matplotlib
@@ -116,6 +118,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         if sampling is None and (out or plot_path):
             sampling = scene.time.duration / 1000
         protect = [scene_path, *scene.input_files]
+        _check_run_outputs(out, plot_path, force, protect)  # now with the scene's files
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
         whole_process()
         try:
@@ -170,6 +173,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
         from massprops.dynamics.precision import precision as run_ladders
         from massprops.dynamics.scene import load_scene
 
+        _check_run_outputs(None, plot_path, force, [scene_path])
         if plot_path:
             # deferred: matplotlib (the plot extra) loads only for --plot
             from massprops.dynamics.plots import require_matplotlib
@@ -183,6 +187,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
             scene = load_any_system(scene_path)
         else:
             scene = load_scene(scene_path)
+        _check_run_outputs(None, plot_path, force, [scene_path, *scene.input_files])
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
         whole_process()
         try:
@@ -193,6 +198,17 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
         _emit_precision(report, scene_path, plot_path, as_json, force, scene.input_files)
 
     ctx.exit(guarded(ctx, run))
+
+
+def _check_run_outputs(trajectory_path: Any, plot_path: str | None, force: bool,
+                       inputs: list) -> None:
+    """The output rule for a run's trajectory and plot, before the run (`check_outputs`)."""
+    # deferred: the outputs' kinds, only where the run writes files
+    from massprops.dynamics.plots import plot_output
+    from massprops.dynamics.trajectory import trajectory_output
+
+    check_outputs([(trajectory_path and str(trajectory_path), trajectory_output()),
+                   (plot_path, plot_output())], force=force, inputs=[str(p) for p in inputs])
 
 
 def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
@@ -249,6 +265,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
         sampling = scene.time.duration / 1000
     progress = _Progress(enabled=not quiet and sys.stderr.isatty())
     protect = [scene_path, *scene.input_files]
+    _check_run_outputs(out, plot_path, force, protect)  # now with the scene's files
     try:
         result = simulate_system(scene, integrator=integrator, rtol=rtol, step=step,
                                  every=sampling, notice=say_note, max_steps=max_steps,

@@ -6,6 +6,7 @@ import click
 
 from massprops.cli.app import cli
 from massprops.cli.common import (
+    check_outputs,
     emit_json,
     guarded,
     non_negative,
@@ -60,6 +61,10 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
         from massprops.robot.analyze import analyze_model
+        from massprops.robot.write.writeback import description_output
+
+        check_outputs([(output_path, description_output(description))], force=force,
+                      inputs=[description])
 
         report = analyze_model(description, source=source or "auto", density=density,
                                package_paths=package_paths, allow_open=allow_open,
@@ -84,3 +89,4 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
 
     code = guarded(ctx, run)
     ctx.exit(max(code, 1 if link_errors else 0))
+

@@ -34,6 +34,7 @@ from massprops.dynamics.model import (
     TimeSettings,
     Torque,
 )
+from massprops.dynamics.trajectory import TRAJECTORY_EXTENSIONS
 from massprops.dynamics.yamlnodes import (
     Field,
     compose,
@@ -61,7 +62,7 @@ __all__ = ["FORCE_TYPES", "FRAMES", "OUTPUT_SUFFIXES", "load_scene",
 
 
 FRAMES: tuple[str, ...] = ("world", "body")
-OUTPUT_SUFFIXES: tuple[str, ...] = (".csv", ".npz")
+OUTPUT_SUFFIXES: tuple[str, ...] = TRAJECTORY_EXTENSIONS
 
 
 # --- the body -----------------------------------------------------------------------------------
@@ -327,7 +328,7 @@ def _output(field: Field | None, base_dir: Path) -> OutputSettings:
     path = None
     if "file" in fields:
         path = base_dir / read_string(fields["file"], "a file name ending in .csv or .npz")
-        if path.suffix not in OUTPUT_SUFFIXES:
+        if path.suffix.lower() not in OUTPUT_SUFFIXES:
             raise fields["file"].error(f"expected a name ending in .csv or .npz, got {path.name!r}")
         if not path.parent.is_dir():
             raise fields["file"].error(f"folder {path.parent} does not exist; create it first "
