@@ -14,6 +14,7 @@ from massprops.cli.common import (
     repair_flags,
     repair_options,
     say_error,
+    say_note,
     say_warning,
 )
 
@@ -26,7 +27,9 @@ from massprops.cli.common import (
               help="Exit 4 if any link's stated inertial differs from its geometry by more than "
                    "RTOL (mass, COM / link size, inertia in the 2-norm; all relative).")
 @click.option("--write", "output_path", default=None, metavar="OUT",
-              help="Write the description with the computed inertials (never over FILE).")
+              help="Write the description with the inertials that are off replaced by the "
+                   "computed ones (missing, invalid, or off by more than --check RTOL, default "
+                   "1e-12); every other byte as in FILE (never over FILE).")
 @click.option("--force", is_flag=True, help="Replace OUT if it exists (never FILE).")
 @click.option("--from", "source", type=click.Choice(("collision", "visual")), default=None,
               help="Which geometry makes every link (default: collision, or visual for a link "
@@ -83,10 +86,24 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
 
             print_model(report, rtol)
         if output_path is not None:
-            report.write(output_path, force=force)
+            written = report.write(output_path, force=force, rtol=rtol)
+            say_note(_rewritten(output_path, written, report, rtol))
         if rtol is not None:
             report.require_agreement(rtol)
 
     code = guarded(ctx, run)
     ctx.exit(max(code, 1 if link_errors else 0))
 
+
+def _rewritten(output_path: str, written: tuple[str, ...], report, rtol: float | None) -> str:
+    """The note --write leaves on stderr: which links' inertials OUT has new."""
+    from massprops.tolerances import WRITE_KEEP_RTOL  # the default, said with the note
+
+    computed = sum(r.computed is not None for r in report.links)
+    within = f"within {WRITE_KEEP_RTOL if rtol is None else rtol:g} of the geometry"
+    if not written:
+        return f"wrote {output_path}: every computed inertial agrees {within}; none rewritten"
+    kept = computed - len(written)
+    return (f"wrote {output_path}: rewrote the inertial of {', '.join(written)} "
+            f"({len(written)} of {computed} computed link(s)"
+            + (f"; the other {kept} agree {within} and are kept)" if kept else ")"))
