@@ -232,6 +232,40 @@ def _repair_flags() -> list:
     ]
 
 
+def robot_file_options(f: Callable) -> Callable:
+    """--package-path / --xacro-arg: how a robot description's references resolve, shared by
+    model and simulate (a description given directly; a `model:` scene has the keys
+    package_path and xacro_args). --xacro-arg arrives as a dict NAME -> VALUE."""
+    for opt in reversed([
+        click.option("--package-path", "package_paths", multiple=True, metavar="DIR",
+                     help="Folder holding packages for package:// and model:// (repeatable; "
+                          "ROS_PACKAGE_PATH is searched too)."),
+        click.option("--xacro-arg", "xacro_args", multiple=True, metavar="NAME:=VALUE",
+                     callback=_xacro_args,
+                     help="An argument for a .xacro FILE (repeatable), as `xacro FILE "
+                          "NAME:=VALUE`: the value of $(arg NAME)."),
+    ]):
+        f = opt(f)
+    return f
+
+
+def _xacro_args(ctx: click.Context, param: click.Parameter,
+                values: tuple[str, ...]) -> dict[str, str]:
+    if not values:
+        return {}
+    # deferred: the xacro rules load only when an argument is given
+    from massprops.robot.formats.xacro_run import parse_xacro_arg
+
+    out = {}
+    for text in values:
+        try:
+            name, value = parse_xacro_arg(text)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc)) from exc
+        out[name] = value
+    return out
+
+
 def repair_flags(f: Callable) -> Callable:
     """--fill-holes / --max-hole / --union / --shell alone (``model`` applies them per mesh)."""
     for opt in reversed(_repair_flags()):

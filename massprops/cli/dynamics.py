@@ -14,6 +14,7 @@ from massprops.cli.common import (
     emit_json,
     guarded,
     positive,
+    robot_file_options,
     say_note,
     say_notes,
     say_warning,
@@ -77,19 +78,23 @@ class _Progress:
 @click.option("--duration", type=click.FloatRange(min=0), default=None,
               help="Seconds to run (overrides time.duration; 0, for a system or a robot "
                    "description: the start pose's reactions and holding torques).")
+@robot_file_options
 @click.pass_context
 def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: str | None,
              integrator: str | None, rtol: float | None, step: float | None,
              every: float | None, plot_path: str | None, force: bool, quiet: bool,
-             max_steps: int | None, duration: float | None) -> None:
+             max_steps: int | None, duration: float | None, package_paths: tuple[str, ...],
+             xacro_args: dict[str, str]) -> None:
     """Integrate the Newton-Euler equations of the one body in SCENE (YAML, SI units), of a
-    system of bodies, or of a robot description (ROBOT.urdf|.sdf|.xml) under gravity."""
+    system of bodies, or of a robot description (ROBOT.urdf|.sdf|.xml|.xacro) under gravity."""
     interrupted = []
 
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
         from massprops.dynamics.compiled.compiling import whole_process
+        from massprops.dynamics.systems.robot_scene import check_description_settings
 
+        check_description_settings(scene_path, package_paths, xacro_args)
         _check_run_outputs(output_path, plot_path, force, [scene_path])
         if plot_path:
             # deferred: matplotlib (the plot extra) loads only for --plot
@@ -99,7 +104,8 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         if _is_system(scene_path):  # `bodies:`, `model:` or a description: the systems package
             whole_process()  # numba started lean: this process runs massprops alone
             if _simulate_system(scene_path, as_json, output_path, integrator, rtol, step, every,
-                                force, plot_path, duration, max_steps, quiet):
+                                force, plot_path, duration, max_steps, quiet,
+                                {"package_paths": package_paths, "xacro_args": xacro_args}):
                 interrupted.append(True)
             return
         # deferred: the one-body run's modules, not a system's
@@ -249,14 +255,15 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
                      integrator: str | None, rtol: float | None, step: float | None,
                      every: float | None, force: bool, plot_path: str | None = None,
                      duration: float | None = None, max_steps: int | None = None,
-                     quiet: bool = False) -> bool:
-    """A system scene or a robot description: run, write the trajectory, print JSON or a short
-    summary; True when Ctrl-C stopped the run (what it computed is written and printed)."""
+                     quiet: bool = False, description: dict | None = None) -> bool:
+    """A system scene or a robot description (``description``: its package_paths and
+    xacro_args): run, write the trajectory, print JSON or a short summary; True when Ctrl-C
+    stopped the run (what it computed is written and printed)."""
     # deferred, as the one-body path's imports: only a system scene needs them
     from massprops.dynamics.systems.robot_scene import load_any_system
     from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
 
-    scene = load_any_system(scene_path, duration)
+    scene = load_any_system(scene_path, duration, **(description or {}))
     for w in scene.warnings:
         say_warning(scene_path, w)
     out = output_path or scene.output.file

@@ -13,6 +13,7 @@ from massprops.cli.common import (
     positive,
     repair_flags,
     repair_options,
+    robot_file_options,
     say_error,
     say_note,
     say_warning,
@@ -36,30 +37,19 @@ from massprops.cli.common import (
                    "with no collision geometry, noted as source: visual).")
 @click.option("--density", type=float, callback=positive,
               help="Density in kg/m³ for every geometry (default: keep each stated mass).")
-@click.option("--package-path", "package_paths", multiple=True, metavar="DIR",
-              help="Folder holding packages for package:// and model:// (repeatable; "
-                   "ROS_PACKAGE_PATH is searched too).")
+@robot_file_options
 @click.option("--allow-open", is_flag=True, help="Compute open meshes anyway (with warnings).")
 @repair_flags
-@click.option("--xacro-arg", "xacro_args", multiple=True, metavar="NAME:=VALUE",
-              help="An argument for a .xacro FILE (repeatable), as `xacro FILE NAME:=VALUE`.")
 @click.pass_context
 def model(ctx: click.Context, description: str, as_json: bool, rtol: float | None,
           output_path: str | None, force: bool, source: str | None, density: float | None,
           package_paths: tuple[str, ...], allow_open: bool, fill_holes: bool,
           max_hole: float | None, union: bool, shell: float | None,
-          xacro_args: tuple[str, ...]) -> None:
+          xacro_args: dict[str, str]) -> None:
     """Inertials of every link of a robot description (URDF, SDF, MJCF or .xacro FILE) from its
     meshes and primitives, against the inertials it states. Repairs apply to each mesh."""
     link_errors = []
     repairs = repair_options(fill_holes, max_hole, union, shell)
-    mappings = {}
-    for arg in xacro_args:
-        name, sep, value = arg.partition(":=")
-        if not sep or not name:
-            raise click.BadParameter(f"expected NAME:=VALUE, got {arg!r}",
-                                     param_hint="--xacro-arg")
-        mappings[name] = value
 
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
@@ -71,7 +61,7 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
 
         report = analyze_model(description, source=source or "auto", density=density,
                                package_paths=package_paths, allow_open=allow_open,
-                               xacro_args=mappings, repairs=repairs)
+                               xacro_args=xacro_args, repairs=repairs)
         for w in report.model.warnings:
             say_warning(description, w)
         for line in report.errors:

@@ -182,10 +182,12 @@ def _as_scene_key(name: str) -> str:
     return f"{name}: true" if name in ("allow_open", "fill_holes", "union") else name
 
 
-def _with_place(exc: InputError, field: Field) -> InputError:
+def _with_place(exc: InputError, field: Field,
+                say: Callable[[str], str] = _as_scene_key) -> InputError:
     """The same error class (so callers can still tell an open mesh from a bad scene), its
-    message prefixed with the scene file, line and key path."""
-    message = one_line(field.where() + exc.render(_as_scene_key))
+    message prefixed with the scene file, line and key path, the settings it names said by
+    ``say`` (default: as a mesh body's keys)."""
+    message = one_line(field.where() + exc.render(say))
     try:
         return type(exc)(message)
     except TypeError:  # a subclass with a different constructor
