@@ -312,3 +312,25 @@ def test_unknown_input_format_is_a_usage_error_listing_the_formats(run, tmp_path
 def test_input_format_is_case_insensitive_with_a_dot(run):
     res = run("inspect", "--json", "--input-format", ".OBJ", SAMPLES / "cube.obj")
     assert res.exit_code == 0 and json_lines(res.stdout)[0]["volume"] == pytest.approx(1.0)
+
+
+# --- --debug says settings as the command's options (issue 30) -------------------------------
+def test_debug_traceback_says_settings_as_options(run, tmp_path):
+    res = run("--debug", "align", SAMPLES / "open_box.obj", tmp_path / "out.obj")
+    assert res.exit_code == 1
+    assert "Traceback (most recent call last)" in res.stderr
+    last = res.stderr.strip().splitlines()[-1]
+    assert last.startswith("massprops.errors.MeshTopologyError: ")
+    assert "use --fill-holes with --max-hole 0.21 to cap them" in last
+    assert "--allow-open to compute anyway" in last and " allow_open " not in last
+
+
+def test_debug_traceback_of_a_batch_says_settings_as_options(tmp_path):
+    """A batch's failure goes through with --debug (the process's own handler printed it, with
+    the library's keyword: "(unit)")."""
+    cube = _scaled_cube(tmp_path / "big.obj", 1e300)
+    cmd = [sys.executable, "-m", "massprops", "--debug", "inspect", str(cube)]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 1
+    assert "Traceback (most recent call last)" in out.stderr
+    assert out.stderr.rstrip().endswith("give the unit its coordinates are in (--unit)")

@@ -12,8 +12,8 @@ from collections.abc import Iterator
 import click
 
 from massprops import __version__
-from massprops.cli.common import say_error
-from massprops.errors import UsageError, error_message
+from massprops.cli.common import say_error, say_traceback
+from massprops.errors import UsageError, error_message, exit_code, format_traceback
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -37,6 +37,16 @@ def _without_warnings() -> Iterator[None]:
         yield
 
 
+def _debug(argv: list[str]) -> bool:
+    """Whether the group's --debug comes before the command in ``argv``."""
+    for arg in argv:
+        if arg == "--debug":
+            return True
+        if not arg.startswith("-"):
+            return False
+    return False
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point: click's own usage errors exit 2; Ctrl-C exits 130 without a traceback."""
     try:
@@ -53,6 +63,12 @@ def main(argv: list[str] | None = None) -> None:
     except UsageError as exc:
         say_error(error_message(exc))
         sys.exit(2)
+    except Exception as exc:  # --debug lets a batch's first failure through; else a bug
+        if _debug(sys.argv[1:] if argv is None else argv):
+            say_traceback(format_traceback(exc))
+        else:
+            say_error(error_message(exc))
+        sys.exit(exit_code(exc))
     # The process ends here: freeze what the command left (after simulate, numba's ~10^6
     # typing and compiled-code objects) so the interpreter's teardown does not collect them one
     # cycle at a time: ~0.25 s of a ~0.7 s simulate, ~0.03 s frozen. Files are closed already

@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from massprops.errors import error_message, exit_code, render_settings
+from massprops.errors import error_message, exit_code, format_traceback, render_settings
 
 UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")
 """The keys of massprops.io.UNITS, written out so that building the CLI does not import the
@@ -83,6 +83,12 @@ def fitted(message: str) -> str:
                        scene=ctx.info_name in SCENE_COMMANDS)
 
 
+def say_traceback(text: str) -> None:
+    """--debug: a traceback (`massprops.errors.format_traceback`, or a worker's) on stderr, the
+    settings its messages name said as this command's options, as the one-line errors are."""
+    click.echo(fitted(cli_text(text)).rstrip("\n"), err=True)
+
+
 def say_note(message: str) -> None:
     """A note on stderr while something slow and one-off happens (never on --json stdout)."""
     click.echo(f"massprops: {message}", err=True)
@@ -98,9 +104,7 @@ def guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
         raise
     except Exception as exc:  # ours, a bug or an environment failure: one line, no traceback
         if ctx.obj.get("debug"):
-            import traceback
-
-            traceback.print_exc()
+            say_traceback(format_traceback(exc))
             return exit_code(exc)
         say_error(error_message(exc))
         return exit_code(exc)

@@ -12,7 +12,7 @@ import contextlib
 import io
 import os
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,6 +34,7 @@ class FallbackReader:
     trimesh_type: str | None
     extension: str  # for a stream spilled to a temporary file, so the libraries see its type
     float32_only: bool = False  # the format stores positions as float32 (glTF) whatever is read
+    check: Callable[[str, str], None] | None = None  # (path, name): the format's own checks
 
     def __call__(self, source: Source) -> Mesh:
         """Returns a Mesh in file units: the file's vertices (float64) and its polygonal cells
@@ -41,6 +42,8 @@ class FallbackReader:
         coordinate_dtype float32 if the file stores float32 coordinates."""
         failures = []
         with _local_path(source, self.extension) as path:
+            if self.check is not None:
+                self.check(path, source.name)
             for library, fmt, read in (
                 ("meshio", self.meshio_format, _read_meshio),
                 ("trimesh", self.trimesh_type, _read_trimesh),

@@ -16,6 +16,7 @@ eulerseq), i.e. each copy is the previous one moved by T; every name inside gets
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -45,9 +46,8 @@ def expand_includes(root: Node, main: Path, _chain: tuple[Path, ...] = ()) -> No
             raise RobotModelError(f"{where}:{node.line}: <include> needs file=\"...\"")
         target = _locate(file, main, where)
         if target is None:
-            raise RobotModelError(
-                f"{where}:{node.line}: <include file={file!r}>: no such file in "
-                f"{main.parent} (the main model's folder) nor in {where.parent}; fix the path")
+            raise RobotModelError(f"{where}:{node.line}: <include file={file!r}>: "
+                                  f"{_not_found(file, main, where)}; fix the path")
         resolved = target.resolve()
         if resolved in chain or len(chain) > _MAX_DEPTH:
             raise RobotModelError(f"{where}:{node.line}: <include file={file!r}> includes "
@@ -59,6 +59,17 @@ def expand_includes(root: Node, main: Path, _chain: tuple[Path, ...] = ()) -> No
             child.parent = parent
         parent.children[at:at + 1] = sub.children
     return root
+
+
+def _not_found(file: str, main: Path, including: Path) -> str:
+    """Where a missing include was looked for: the folders, absolute, each once."""
+    if Path(file).is_absolute():
+        return "no such file"
+    first, second = (os.path.abspath(p.parent) for p in (main, including))
+    if first == second:
+        return f"no such file in {first} (the main model's folder)"
+    return (f"no such file in {first} (the main model's folder) nor in {second} (the "
+            "including file's folder)")
 
 
 def _locate(file: str, main: Path, including: Path) -> Path | None:
