@@ -275,24 +275,33 @@ def test_density_beyond_float64_exit_1_in_one_line(tmp_path):
     assert len(lines) == 1 and "mass properties beyond float64's range" in lines[0], out.stderr
 
 
+STRAY_WARNING = """
+import sys, warnings
+import massprops.inspection.file as inspection
+from massprops.cli import main
+
+real = inspection.read_mesh
+
+def warning_read(*args, **kwargs):
+    warnings.warn("overflow encountered in multiply", RuntimeWarning, stacklevel=1)
+    return real(*args, **kwargs)
+
+inspection.read_mesh = warning_read
+main(sys.argv[1:])
+"""
+
+
 @pytest.mark.parametrize("debug", [False, True])
-def test_a_stray_warning_never_reaches_stderr_without_debug(run, monkeypatch, recwarn, debug):
-    import warnings
-
-    import massprops.inspection.file as inspection
-
-    real = inspection.read_mesh
-
-    def warning_read(*args, **kwargs):
-        warnings.warn("overflow encountered in multiply", RuntimeWarning, stacklevel=1)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(inspection, "read_mesh", warning_read)
-    res = run(*(["--debug"] if debug else []), "inspect", "--json", "--jobs", "1",
-              SAMPLES / "cube.obj")
-    assert res.exit_code == 0 and res.stderr == ""
-    assert [str(w.message) for w in recwarn] == (
-        ["overflow encountered in multiply"] if debug else [])
+def test_a_stray_warning_never_reaches_stderr_without_debug(debug):
+    """The process's entry ignores Python's warnings (a bug's noise, to be fixed at its cause);
+    --debug shows them. A real process: the tests' own in-process runs keep every warning an
+    error (pyproject's filterwarnings), so that a cause is never hidden from them."""
+    args = [*(["--debug"] if debug else []), "inspect", "--json", "--jobs", "1",
+            str(SAMPLES / "cube.obj")]
+    out = subprocess.run([sys.executable, "-c", STRAY_WARNING, *args], capture_output=True,
+                         text=True, timeout=60)
+    assert out.returncode == 0 and json_lines(out.stdout)[0]["volume"] == pytest.approx(1.0)
+    assert ("RuntimeWarning: overflow encountered in multiply" in out.stderr) is debug
 
 
 # --- a bad --input-format is a usage error (issue 30) ---------------------------------------------
