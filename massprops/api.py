@@ -89,17 +89,9 @@ def load_scene(path: PathLike) -> Scene | SystemScene:
     runs (its stated inertials and base, gravity, 1 s from the zero pose at rest)."""
     # deferred: start-up
     from massprops.dynamics.scene import load_scene as load
-    from massprops.dynamics.systems.robot_scene import is_description, load_any_system
-    from massprops.dynamics.systems.scene import is_system_text
+    from massprops.dynamics.systems.robot_scene import is_system_file, load_any_system
 
-    if is_description(path):
-        return load_any_system(path)
-    try:
-        with open(path, encoding="utf-8-sig") as handle:
-            system = is_system_text(handle.read())
-    except (OSError, UnicodeDecodeError):  # the reader below says what is wrong, in one line
-        system = False
-    return load_any_system(path) if system else load(path)
+    return load_any_system(path) if is_system_file(path) else load(path)
 
 
 def simulate(scene: Scene | SystemScene | PathLike,

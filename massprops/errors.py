@@ -150,6 +150,26 @@ def exit_code(exc: BaseException) -> int:
     return 3  # anything else is a failure of the computation itself (a bug)
 
 
+def format_traceback(exc: BaseException) -> str:
+    """``exc``'s traceback as Python formats it (for ``--debug``), each massprops error's message
+    in it as its template: the settings it names kept as `setting_ref` references, for whoever
+    shows it to say in its own terms, as `error_message` does for the one line."""
+    import traceback  # deferred: only a failure pays for it
+
+    text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+    seen: set[int] = set()
+    stack: list[BaseException | None] = [exc]
+    while stack:
+        e = stack.pop()
+        if e is None or id(e) in seen:
+            continue
+        seen.add(id(e))
+        if isinstance(e, MassPropsError) and e.settings:
+            text = text.replace(str(e), e.template)
+        stack += [e.__cause__, e.__context__]
+    return text
+
+
 def error_message(exc: BaseException) -> str:
     """The one line that reports ``exc`` (the CLI prefixes it with ``massprops: error: ``), its
     `setting_ref` references kept for the caller to say in its terms (`render_settings`).

@@ -53,6 +53,15 @@ comes back exact; 1e-12 leaves room for a tensor that was rounded to ~12 digits 
 (a thin rod or disc sits exactly on the triangle inequality's edge) while a placeholder that
 breaks it does so by percent."""
 
+WRITE_KEEP_RTOL = 1e-12
+"""``model --write`` without ``--check``: a stated inertial within this of the computed one
+(relative, as ``--check`` measures: mass, COM / link size, inertia in the 2-norm) is kept byte
+for byte; only the others are rewritten. 1e-12 is round-off, of the integral (~1e-15) and of
+printing (repr reads back exact, 12 digits within 5e-13): an inertial massprops wrote is kept,
+so a second ``--write`` changes nothing and ``--check 1e-12`` passes after ``--write``. With
+``--check RTOL`` the check's own tolerance decides instead (1e-6 keeps values printed to six
+digits)."""
+
 MAX_HOLE_AREA_FRACTION = 0.1
 """``--fill-holes`` caps a boundary loop only if its cap is at most this fraction of the surface
 area (``--max-hole`` overrides). Holes from scanning and export are small (well under 1 % of the

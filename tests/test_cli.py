@@ -241,3 +241,105 @@ def test_unit_choices_are_the_readers_units():
 ], ids=["input", "usage", "computation", "os-error", "bug", "interrupt"])
 def test_exit_code_table(exc, code):
     assert exit_code(exc) == code
+
+
+# --- no numpy warning on stderr (issue 30) --------------------------------------------------------
+def _scaled_cube(path, scale: float):
+    lines = [f"v {x * scale!r} {y * scale!r} {z * scale!r}"
+             for x, y, z in ((i & 1, (i >> 1) & 1, (i >> 2) & 1) for i in range(8))]
+    lines += ["f " + " ".join(str(i + 1) for i in q) for q in CUBE_QUADS]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("scale", [1e300, 1e200])
+def test_coordinates_too_large_exit_1_in_one_line(tmp_path, scale):
+    """A real process: numpy's RuntimeWarnings went to stderr (12 lines) before exit 3."""
+    cube = _scaled_cube(tmp_path / "big.obj", scale)
+    cmd = [sys.executable, "-m", "massprops", "inspect", "--json", str(cube)]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 1 and out.stdout == ""
+    assert out.stderr == (
+        f"massprops: error: {cube}: coordinates too large for float64 mass properties: vertex 2 "
+        f"has |x| = {scale:.3g} m, but the inertia integrates coordinates to the fifth power, "
+        "finite only for |x| below 6e+60 m (12 triangles); rescale the mesh or give the unit its "
+        "coordinates are in (--unit)\n")
+
+
+def test_density_beyond_float64_exit_1_in_one_line(tmp_path):
+    cube = _scaled_cube(tmp_path / "big.obj", 1e60)
+    cmd = [sys.executable, "-m", "massprops", "inspect", "--density", "1e300", str(cube)]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 1 and out.stdout == ""
+    lines = out.stderr.splitlines()
+    assert len(lines) == 1 and "mass properties beyond float64's range" in lines[0], out.stderr
+
+
+STRAY_WARNING = """
+import sys, warnings
+import massprops.inspection.file as inspection
+from massprops.cli import main
+
+real = inspection.read_mesh
+
+def warning_read(*args, **kwargs):
+    warnings.warn("overflow encountered in multiply", RuntimeWarning, stacklevel=1)
+    return real(*args, **kwargs)
+
+inspection.read_mesh = warning_read
+main(sys.argv[1:])
+"""
+
+
+@pytest.mark.parametrize("debug", [False, True])
+def test_a_stray_warning_never_reaches_stderr_without_debug(debug):
+    """The process's entry ignores Python's warnings (a bug's noise, to be fixed at its cause);
+    --debug shows them. A real process: the tests' own in-process runs keep every warning an
+    error (pyproject's filterwarnings), so that a cause is never hidden from them."""
+    args = [*(["--debug"] if debug else []), "inspect", "--json", "--jobs", "1",
+            str(SAMPLES / "cube.obj")]
+    out = subprocess.run([sys.executable, "-c", STRAY_WARNING, *args], capture_output=True,
+                         text=True, timeout=60)
+    assert out.returncode == 0 and json_lines(out.stdout)[0]["volume"] == pytest.approx(1.0)
+    assert ("RuntimeWarning: overflow encountered in multiply" in out.stderr) is debug
+
+
+# --- a bad --input-format is a usage error (issue 30) ---------------------------------------------
+@pytest.mark.parametrize("command", ["inspect", "align"])
+def test_unknown_input_format_is_a_usage_error_listing_the_formats(run, tmp_path, command):
+    from massprops.io import input_formats
+
+    args = [SAMPLES / "cube.obj"] + ([tmp_path / "out.obj"] if command == "align" else [])
+    res = run(command, *args, "--input-format", "bogus")
+    assert res.exit_code == 2 and res.stdout == ""
+    assert res.stderr.splitlines()[-1] == (
+        f"Error: Invalid value for '--input-format': 'bogus' is not one of "
+        f"{', '.join(input_formats())}")
+    assert not (tmp_path / "out.obj").exists()
+
+
+def test_input_format_is_case_insensitive_with_a_dot(run):
+    res = run("inspect", "--json", "--input-format", ".OBJ", SAMPLES / "cube.obj")
+    assert res.exit_code == 0 and json_lines(res.stdout)[0]["volume"] == pytest.approx(1.0)
+
+
+# --- --debug says settings as the command's options (issue 30) -------------------------------
+def test_debug_traceback_says_settings_as_options(run, tmp_path):
+    res = run("--debug", "align", SAMPLES / "open_box.obj", tmp_path / "out.obj")
+    assert res.exit_code == 1
+    assert "Traceback (most recent call last)" in res.stderr
+    last = res.stderr.strip().splitlines()[-1]
+    assert last.startswith("massprops.errors.MeshTopologyError: ")
+    assert "use --fill-holes with --max-hole 0.21 to cap them" in last
+    assert "--allow-open to compute anyway" in last and " allow_open " not in last
+
+
+def test_debug_traceback_of_a_batch_says_settings_as_options(tmp_path):
+    """A batch's failure goes through with --debug (the process's own handler printed it, with
+    the library's keyword: "(unit)")."""
+    cube = _scaled_cube(tmp_path / "big.obj", 1e300)
+    cmd = [sys.executable, "-m", "massprops", "--debug", "inspect", str(cube)]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 1
+    assert "Traceback (most recent call last)" in out.stderr
+    assert out.stderr.rstrip().endswith("give the unit its coordinates are in (--unit)")

@@ -218,12 +218,14 @@ def test_open_cube_is_refused_with_the_gap_counted():
     mesh = from_polygons(corners(), CUBE_QUADS[1:], "open.obj")
     with pytest.raises(MeshTopologyError) as err:
         prepare_mesh(mesh)
-    assert err.value.settings == ("fill_holes", "allow_open")
+    assert err.value.settings == ("fill_holes", "max_hole", "shell", "allow_open")
     assert said_by_cli(err.value) == (
         "open.obj: mesh is not closed: 4 boundary edges (total length 4 m "
                               "in 1 boundary loop, the largest of 4 edges spanning 1 m² (20% of "
-                              "the surface area)); use --fill-holes to cap them, or --allow-open "
-                              "to compute anyway")
+                              "the surface area)); use --fill-holes with --max-hole 0.21 to cap "
+                              "them (the largest is above the default limit 0.1), --shell "
+                              "THICKNESS for a thin-walled or open part, or --allow-open to "
+                              "compute anyway")
     fixed, health = prepare_mesh(mesh, allow_open=True)
     assert fixed is mesh
     assert_health(health, dict(closed=False, boundary_edges=4, manifold=False, nonmanifold_edges=0,

@@ -480,6 +480,18 @@ def test_stream_without_format_is_a_usage_error():
 
 # --- bad inputs: (file name, content, error class, what the message says) ----------------------
 TETRA_OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+CUBE_PLY = ("ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 6\nproperty list uchar int vertex_indices\n"
+            "end_header\n" + "".join(f"{i & 1} {(i >> 1) & 1} {(i >> 2) & 1}\n" for i in range(8))
+            + "".join("4 " + " ".join(map(str, q)) + "\n" for q in CUBE_QUADS))
+CUBE_PLY_BINARY = (b"ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty double x\n"
+                   b"property double y\nproperty double z\nelement face 6\n"
+                   b"property list uchar int vertex_indices\nend_header\n"
+                   + np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)],
+                              "<f8").tobytes()
+                   + b"".join(b"\x04" + np.array(q, "<i4").tobytes() for q in CUBE_QUADS))
+"""The unit cube in PLY, ASCII and binary (the ply-* cases below cut them short)."""
+
 BAD_FILES = {
     "empty-obj": ("e.obj", b"", MeshFormatError, "empty"),
     "empty-stl": ("e.stl", b"", MeshFormatError, "empty"),
@@ -595,6 +607,16 @@ BAD_FILES = {
     "off-short-vertex": ("a.off", TETRA_OFF.replace("\n0 1 0\n", "\n0 1\n"), MeshFormatError,
                          "line 6: vertex 3 of 4 has 2"),
     "off-not-utf8": ("a.off", TETRA_OFF.encode("utf-16"), MeshFormatError, "binary data"),
+    # issue 30: a PLY cut short was "no faces (a point cloud or a drawing?)", or an open mesh
+    "ply-ascii-cut-in-faces": ("a.ply", "\n".join(CUBE_PLY.splitlines()[:-3]), MeshFormatError,
+                               "truncated: the header declares 8 vertices and 6 faces, the file "
+                               "holds 8 vertices and 3 faces; copy or export the file again"),
+    "ply-ascii-cut-in-vertices": ("a.ply", "\n".join(CUBE_PLY.splitlines()[:14]),
+                                  MeshFormatError, "truncated: the header declares 8 vertices "
+                                  "and 6 faces, the file holds 5 vertices and 0 faces"),
+    "ply-binary-cut-in-vertices": ("a.ply", CUBE_PLY_BINARY[:-122], MeshFormatError,
+                                   "truncated: the header declares 8 vertices and 6 faces, the "
+                                   "file holds 7 vertices;"),
     "unknown-extension": ("a.xyz", b"1 2 3", UnknownFormatError, "known: "),
     "no-extension": ("mesh", b"1 2 3", UnknownFormatError, ".obj"),
 }
@@ -632,7 +654,7 @@ def test_permission_denied(tmp_path, monkeypatch):
     def denied(*args, **kwargs):
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr("massprops.io.source.open", denied, raising=False)
+    monkeypatch.setattr("massprops.files.open", denied, raising=False)
     with pytest.raises(MeshFileError, match="permission denied") as caught:
         read_mesh(tmp_path / "locked.obj")
     assert str(caught.value).startswith(str(tmp_path / "locked.obj"))
@@ -785,7 +807,7 @@ def test_atomic_write_bytes_for_other_outputs(tmp_path):
 
 
 def test_write_errors(tmp_path):
-    with pytest.raises(UnknownFormatError, match=".obj"):
+    with pytest.raises(UsageError, match=r"a.vtk: cannot write a mesh as '.vtk'; expected .*\.obj"):
         write_mesh(cube(), tmp_path / "a.vtk")
     with pytest.raises(MeshFileError, match="does not exist"):
         write_mesh(cube(), tmp_path / "missing" / "a.obj")

@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parent.parent / "massprops"
 
 LAYERS = (
     ("massprops.errors", "massprops.tolerances", "massprops.rotation", "massprops.inertia",
-     "massprops.parallel"),
+     "massprops.parallel", "massprops.files"),
     ("massprops.mesh",),
     ("massprops.io", "massprops.repair"),
     ("massprops.inspection", "massprops.cad"),

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from fractions import Fraction
 
 import numpy as np
@@ -14,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
 
-from massprops.errors import ComputationError, DegenerateMeshError, MeshFormatError, UsageError
+from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError
 from massprops.mesh import Mesh, facesums
 from massprops.mesh import integral as mass_module
 from massprops.mesh.integral import mass_properties
@@ -446,11 +447,60 @@ def test_flat_mesh_encloses_no_volume():
     (np.array([[0, 0, 0], [1, 0, 0], [0, np.nan, 0.0]]), np.array([[0, 1, 2], [0, 2, 1]]),
      MeshFormatError, "finite"),
     (np.eye(3), np.array([[0, 1, 3]]), MeshFormatError, "face indices"),
-    (box(1e110, 1e110, 1e110)[0], BOX_FACES, ComputationError, "overflow"),
+    (box(1e110, 1e110, 1e110)[0], BOX_FACES, MeshFormatError, "too large for float64"),
 ], ids=["empty", "nan", "bad-index", "overflow"])
 def test_refusals(v, f, error, match):
     with pytest.raises(error, match=match):
         mass_properties(mesh(v, f, "bad"))
+
+
+# --- coordinates beyond float64 (issue 30): refused up front, exit 1, no numpy warning ----------
+@pytest.mark.parametrize("size", [1e300, 1e200, 1e62])
+def test_coordinates_too_large_are_refused_before_any_product(size):
+    from massprops.inspection.file import inspect_mesh
+
+    v, f = box(2 * size, 2 * size, 2 * size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a RuntimeWarning (overflow) would fail the test here
+        with pytest.raises(MeshFormatError) as caught:
+            inspect_mesh(mesh(v, f, "big.obj"))
+    assert str(caught.value) == (
+        f"big.obj: coordinates too large for float64 mass properties: vertex 1 has |x| = "
+        f"{size:.3g} m, but the inertia integrates coordinates to the fifth power, finite only "
+        f"for |x| below 6e+60 m (12 triangles); rescale the mesh or give the unit its "
+        f"coordinates are in (unit)")
+
+
+def test_coordinate_limit_is_a_real_bound():
+    """(float64 max / (2000 m))^(1/5): every result finite just below it, for boxes reaching the
+    limit on both sides of the origin and on one (the integral's origin inside the box)."""
+    limit = mass_module.coordinate_limit(12)
+    assert limit == pytest.approx((np.finfo(np.float64).max / 24000) ** 0.2)
+    assert 5e60 < limit < 1e61
+    assert mass_module.coordinate_limit(10**9) == pytest.approx(limit * (12 / 1e9) ** 0.2)
+    v, f = box(2.0, 2.0, 2.0)
+    for shifted in (v, v + 1.0):  # [-1, 1]³ and [0, 2]³, scaled to reach 0.999 limit
+        vertices = shifted * (0.999 * limit / np.abs(shifted).max())
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            props = mass_properties(mesh(vertices, f))
+        values = [props.volume, props.mass, *props.center_of_mass, *props.inertia.ravel(),
+                  *props.uncertainty.rounding.inertia.ravel()]
+        assert all(math.isfinite(x) for x in values)
+        assert props.principal_moments.max() > 1e300
+    with pytest.raises(MeshFormatError, match="too large for float64"):
+        mass_properties(mesh(v * 1.001 * limit, f))
+
+
+def test_density_beyond_float64_is_refused_without_warnings():
+    v, f = box(2e60, 2e60, 2e60)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(MeshFormatError) as caught:
+            mass_properties(mesh(v, f, "big.obj"), density=1e300)
+    assert str(caught.value).startswith("big.obj: mass properties beyond float64's range")
+    assert "8e+180 m³ at 1e+300 kg/m³" in str(caught.value)
+    assert "give a smaller density or mass" in str(caught.value)
 
 
 # --- float32 coordinates: the input error bar -----------------------------------------------------

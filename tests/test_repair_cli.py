@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import CUBE_QUADS, CUBE_VERTS, json_lines, vf_text
+from conftest import CUBE_QUADS, CUBE_VERTS, SAMPLES, json_lines, vf_text
 
 from massprops.dynamics.scene import load_scene
 from massprops.errors import InputError
@@ -67,8 +67,24 @@ def test_open_mesh_error_names_fill_holes_and_the_hole(run, tmp_path):
     assert res.exit_code == 1
     assert res.stderr == (f"massprops: error: {path}: mesh is not closed: 4 boundary edges (total "
                           f"length 4 m in 1 boundary loop, the largest of 4 edges spanning 1 m² "
-                          f"(20% of the surface area)); use --fill-holes to cap them, or "
-                          f"--allow-open to compute anyway\n")
+                          f"(20% of the surface area)); use --fill-holes with --max-hole 0.21 "
+                          f"to cap them (the largest is above the default limit 0.1), --shell "
+                          f"THICKNESS for a thin-walled or open part, or --allow-open to "
+                          f"compute anyway\n")
+    res = run("inspect", "--json", "--fill-holes", "--max-hole", "0.21", path)
+    assert res.exit_code == 0, res.stderr  # what the message says works
+
+
+def test_a_small_hole_suggests_fill_holes_alone_which_works(run, tmp_path):
+    lines = (SAMPLES / "torus.obj").read_text().splitlines()
+    first_face = next(i for i, line in enumerate(lines) if line.startswith("f "))
+    path = tmp_path / "holed.obj"
+    path.write_text("\n".join(lines[:first_face] + lines[first_face + 1:]) + "\n")
+    res = run("inspect", path)
+    assert res.exit_code == 1
+    assert res.stderr.endswith("; use --fill-holes to cap them, or --allow-open to compute "
+                               "anyway\n")
+    assert run("inspect", "--fill-holes", path).exit_code == 0
 
 
 def test_fill_holes_refuses_an_opening_then_caps_it_when_allowed(run, tmp_path):
@@ -77,8 +93,8 @@ def test_fill_holes_refuses_an_opening_then_caps_it_when_allowed(run, tmp_path):
     assert res.exit_code == 1
     assert res.stderr == (f"massprops: error: {path}: boundary loop 1 of 1 (4 edges, length 4 m) "
                           f"would need a cap of 1 m², 20% of the surface area: too large to be a "
-                          f"hole (limit 0.1 of the surface; raise it with --max-hole, or use "
-                          f"--shell for a thin-walled or open part)\n")
+                          f"hole (limit 0.1 of the surface; raise it with --max-hole 0.21, or "
+                          f"use --shell for a thin-walled or open part)\n")
     res = run("inspect", "--json", "--fill-holes", "--max-hole", "0.25", path)
     assert res.exit_code == 0, res.stderr
     (out,) = json_lines(res.stdout)
@@ -180,7 +196,9 @@ def test_scene_open_mesh_error_words_the_fix_as_keys(tmp_path):
     with pytest.raises(InputError) as info:
         load_scene(tmp_path / "scene.yaml")
     message = str(info.value)
-    assert "use fill_holes: true to cap them, or allow_open: true to compute anyway" in message
+    assert ("use fill_holes: true with max_hole 0.21 to cap them (the largest is above the "
+            "default limit 0.1), shell THICKNESS for a thin-walled or open part, or "
+            "allow_open: true to compute anyway") in message
     assert "--" not in message
 
 

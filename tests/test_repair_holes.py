@@ -19,6 +19,7 @@ from test_repair_union import assert_matches, bars
 from massprops.errors import MeshTopologyError
 from massprops.inspection.file import inspect_mesh
 from massprops.mesh import Mesh
+from massprops.mesh.boundary import max_hole_for
 from massprops.repair import RepairOptions
 from massprops.repair.holes import fill_holes
 from massprops.repair.triangulate import ear_clip, is_simple, min_area, plane_frame
@@ -118,8 +119,9 @@ def test_opening_is_refused_naming_its_length_and_area():
     assert said_by_cli(err.value) == (
         f"bowl: boundary loop 1 of 1 (32 edges, length {length:.6g} m) would need a cap of "
         f"{cap:.6g} m², {100 * cap / surface:.3g}% of the surface area: too large to be a hole "
-        f"(limit 0.1 of the surface; raise it with --max-hole, or use --shell for a thin-walled "
-        f"or open part)")
+        f"(limit 0.1 of the surface; raise it with --max-hole "
+        f"{max_hole_for(cap / surface):g}, or use --shell for a thin-walled or open part)")
+    inspect_mesh(bowl, repairs=fill(max_hole_for(cap / surface)))  # what it says works
     result = inspect_mesh(bowl, repairs=fill(0.9))  # asked for: a flat cap, exact
     truth = exact_mesh(np.concatenate([bowl.vertices]), np.concatenate(
         [bowl.faces, [[0, (i + 1) % 32, i] for i in range(1, 32)]]))

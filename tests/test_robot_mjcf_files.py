@@ -87,6 +87,24 @@ def test_include_errors_name_the_including_file_and_line(tmp_path):
         analyze_model(tmp_path / "loop.xml")
 
 
+def test_a_missing_include_names_the_folders_it_was_looked_for_in(run, tmp_path, monkeypatch):
+    """Issue 30: a main model given as a bare name said "no such file in . (the main model's
+    folder) nor in .": the folders are said absolute, once each."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "main.xml").write_text('<mujoco>\n<include file="nope.xml"/>\n</mujoco>')
+    res = run("model", "main.xml")
+    assert res.exit_code == 1
+    assert res.stderr == (f"massprops: error: main.xml:2: <include file='nope.xml'>: no such "
+                          f"file in {tmp_path} (the main model's folder); fix the path\n")
+    (tmp_path / "top.xml").write_text('<mujoco><include file="sub/a.xml"/></mujoco>')
+    (tmp_path / "sub" / "a.xml").write_text('<mujoco><include file="b.xml"/></mujoco>')
+    res = run("model", "top.xml")
+    assert res.stderr == (f"massprops: error: sub/a.xml:1: <include file='b.xml'>: no such file "
+                          f"in {tmp_path} (the main model's folder) nor in {tmp_path / 'sub'} "
+                          "(the including file's folder); fix the path\n")
+
+
 def test_include_looks_in_the_main_folder_first(tmp_path):
     """MuJoCo's rule: a relative include is found from the main file's folder before the
     including file's own folder."""

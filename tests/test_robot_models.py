@@ -253,6 +253,61 @@ def test_write_then_check_1e12(run, path, density):
         out.unlink(missing_ok=True)
 
 
+@pytest.mark.parametrize("check", [None, "1e-6"], ids=["default", "check-1e-6"])
+@pytest.mark.parametrize("path", [ARM, BASE, GRIPPER], ids=["urdf", "sdf", "mjcf"])
+def test_write_rewrites_only_the_inertials_that_are_off(run, path, check):
+    """Issue 30: every other byte stays, correct inertials included (they were rewritten, 5 ->
+    5.0); off means none stated, invalid, or off by more than --check RTOL (default 1e-12)."""
+    from massprops.robot.analyze import load_model
+
+    rtol = 1e-12 if check is None else float(check)
+    rows = [r for r in json_lines(run("model", "--json", path).stdout)
+            if r["status"] == "computed"]
+    off = [r["link"] for r in rows if r["stated"] is None or not r["stated"]["valid"]
+           or max(r["comparison"][k] for k in ("mass_rel", "com_rel", "inertia_rel")) > rtol]
+    # the three files and two tolerances give every case: all off, some, none
+    out = path.with_name(f"massprops-test-only-{os.getpid()}{path.suffix}")
+    try:
+        res = run("model", "--write", out, *(["--check", check] if check else []), path)
+        assert res.exit_code in (0, 4), res.stderr
+        said = (f"rewrote the inertial of {', '.join(off)} ({len(off)} of {len(rows)}"
+                if off else "every computed inertial agrees within")
+        assert said in res.stderr
+        before, after = path.read_bytes(), out.read_bytes()
+        old = {k.name: k for k in load_model(path).links}
+        new = {k.name: k for k in load_model(out).links}
+        # put the old bytes back where the rewritten links' inertials are: the input again
+        undo = bytearray(after)
+        for name in sorted(off, key=lambda n: new[n].inertial_node.start, reverse=True):
+            o, n = old[name].inertial_node, new[name].inertial_node
+            if o is None:  # inserted after the link's start tag, on a line of its own
+                del undo[new[name].node.head_end:n.end]
+            else:
+                undo[n.start:n.end] = before[o.start:o.end]
+        assert bytes(undo) == before
+        for name in set(old) - set(off):  # kept: the very same bytes
+            o, n = old[name].inertial_node, new[name].inertial_node
+            if o is not None:
+                assert after[n.start:n.end] == before[o.start:o.end]
+    finally:
+        out.unlink(missing_ok=True)
+
+
+def test_write_keeps_every_inertial_that_agrees(run, tmp_path):
+    """A file --write wrote is kept byte for byte by a second --write (idempotent)."""
+    src = tmp_path / "r.urdf"
+    src.write_text('<robot name="r">\n  <link name="a">\n    <inertial><mass value="5"/>'
+                   '<inertia ixx="0.8333333333333334" ixy="0" ixz="0" iyy="0.8333333333333334" '
+                   'iyz="0" izz="0.8333333333333334"/></inertial>\n    <collision><geometry>'
+                   '<box size="1 1 1"/></geometry></collision>\n  </link>\n</robot>\n')
+    out = tmp_path / "o.urdf"
+    res = run("model", "--write", out, src)
+    assert res.exit_code == 0, res.stderr
+    assert out.read_bytes() == src.read_bytes()  # `5` stays `5`
+    assert res.stderr == (f"massprops: wrote {out}: every computed inertial agrees within "
+                          "1e-12 of the geometry; none rewritten\n")
+
+
 def test_write_inserts_with_the_links_indentation(run, tmp_path):
     src = tmp_path / "r.urdf"
     src.write_text('<robot name="r">\n\t<link name="a">\n\t\t<collision><geometry><box size="1 '

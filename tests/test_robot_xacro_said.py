@@ -50,3 +50,124 @@ def test_simulate_reads_the_expanded_xacro(tmp_path, run):
     assert result.exit_code == 0, result.stderr
     held = json.loads(result.stdout)["final"]["joints"]["j"]["holding"][0]
     assert held == pytest.approx(-9.81 * 2 * 0.2, rel=1e-12)
+
+
+# --- the settings a description's messages name exist where the message is read (issue 30) ----
+ARG_ARM = ARM.replace('<xacro:property name="reach" value="0.4"/>',
+                      '<xacro:arg name="unused" default="0"/>').replace(
+    "${reach/2}", "$(arg half)").replace("${reach}", "0.4")
+
+
+def _one_error(result) -> str:
+    lines = result.stderr.strip().splitlines()
+    errors = [x for x in lines if x.startswith("massprops: error: ")]
+    assert len(errors) == 1 and "Traceback" not in result.stderr, result.stderr
+    return errors[0].removeprefix("massprops: error: ")
+
+
+def test_simulate_takes_xacro_arg_as_its_message_says(tmp_path, run):
+    pytest.importorskip("xacro")
+    path = tmp_path / "arm.urdf.xacro"
+    path.write_text(ARG_ARM)
+    result = run("simulate", path, "--duration", "0", "--json")
+    assert result.exit_code == 1
+    assert _one_error(result) == (f"{path}: xacro failed: Undefined substitution argument half; "
+                                  "give its value with --xacro-arg half:=VALUE")
+    result = run("simulate", path, "--duration", "0", "--json", "--xacro-arg", "half:=0.2")
+    assert result.exit_code == 0, result.stderr
+    held = json.loads(result.stdout)["final"]["joints"]["j"]["holding"][0]
+    assert held == pytest.approx(-9.81 * 2 * 0.2, rel=1e-12)
+
+
+def test_a_model_scene_takes_xacro_args_as_its_message_says(tmp_path, run):
+    pytest.importorskip("xacro")
+    (tmp_path / "arm.urdf.xacro").write_text(ARG_ARM)
+    scene = tmp_path / "arm.yaml"
+    scene.write_text("model: arm.urdf.xacro\ntime: {duration: 1}\n")
+    result = run("simulate", scene, "--duration", "0")
+    assert result.exit_code == 1
+    assert _one_error(result) == (
+        f"{scene}:1: model: {tmp_path / 'arm.urdf.xacro'}: xacro failed: Undefined "
+        "substitution argument half; give its value with an entry of the scene key "
+        "xacro_args: half:=VALUE")
+    scene.write_text("model: arm.urdf.xacro\nxacro_args: [half:=0.2]\ntime: {duration: 1}\n"
+                     "forces: [{type: gravity, g: [0, 0, -9.81]}]\n")
+    result = run("simulate", scene, "--duration", "0", "--json")
+    assert result.exit_code == 0, result.stderr
+    held = json.loads(result.stdout)["final"]["joints"]["j"]["holding"][0]
+    assert held == pytest.approx(-9.81 * 2 * 0.2, rel=1e-12)
+    scene.write_text("model: arm.urdf.xacro\nxacro_args: [half]\ntime: {duration: 1}\n")
+    assert _one_error(run("simulate", scene)) == (
+        f"{scene}:2: xacro_args[0]: expected NAME:=VALUE, got 'half'")
+
+
+def test_an_undefined_property_is_said_as_such_not_as_an_argument(tmp_path, run):
+    pytest.importorskip("xacro")
+    path = tmp_path / "arm.urdf.xacro"
+    path.write_text(ARM.replace('<xacro:property name="reach" value="0.4"/>', ""))
+    result = run("model", path)
+    assert result.exit_code == 1
+    line = _one_error(result)
+    assert line.startswith(f"{path}: xacro failed: name 'reach' is not defined")
+    assert line.endswith("; the property 'reach' is not defined in arm.urdf.xacro nor in the "
+                         "files it includes: define it there (<xacro:property name=\"reach\" "
+                         "value=\"...\"/>) or fix the expression")
+    assert "--xacro-arg" not in line
+
+
+PACKAGED = """<robot name="r">
+  <link name="base"/>
+  <link name="arm"><inertial><origin xyz="0.2 0 0"/><mass value="2"/>
+    <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.03"/></inertial>
+    <collision><origin xyz="-0.3 -0.5 -0.5"/>
+      <geometry><mesh filename="package://mypkg/meshes/cube.obj"/></geometry></collision></link>
+  <joint name="j" type="continuous"><parent link="base"/><child link="arm"/>
+    <origin xyz="0 0 0.4"/><axis xyz="0 1 0"/></joint>
+</robot>
+"""
+
+
+def test_a_model_scene_takes_package_path_as_its_message_says(tmp_path, run):
+    """inertials: computed reads the package:// mesh: a unit cube of the stated 2 kg whose
+    centre is 0.2 m out along x (the holding torque of 2 kg at 0.2 m)."""
+    from conftest import SAMPLES
+
+    (tmp_path / "ros" / "mypkg" / "meshes").mkdir(parents=True)
+    (tmp_path / "ros" / "mypkg" / "meshes" / "cube.obj").write_bytes(
+        (SAMPLES / "cube.obj").read_bytes())
+    (tmp_path / "robot").mkdir()
+    (tmp_path / "robot" / "arm.urdf").write_text(PACKAGED)
+    scene = tmp_path / "robot" / "arm.yaml"
+    scene.write_text("model: arm.urdf\ninertials: computed\ntime: {duration: 1}\n")
+    line = _one_error(run("simulate", scene, "--duration", "0"))
+    assert line.startswith(f"{scene}:1: model: ")
+    assert line.endswith("give the scene key package_path: DIR (the folder holding mypkg/) or "
+                         "set ROS_PACKAGE_PATH")
+    scene.write_text("model: arm.urdf\npackage_path: ../ros\ninertials: computed\n"
+                     "time: {duration: 1}\nforces: [{type: gravity, g: [0, 0, -9.81]}]\n")
+    result = run("simulate", scene, "--duration", "0", "--json")
+    assert result.exit_code == 0, result.stderr
+    held = json.loads(result.stdout)["final"]["joints"]["j"]["holding"][0]
+    assert held == pytest.approx(-9.81 * 2 * 0.2, rel=1e-12)
+    result = run("simulate", scene, "--package-path", tmp_path / "ros")
+    assert result.exit_code == 2
+    assert _one_error(result) == (
+        f"{scene}: --package-path applies to a robot description given directly; a scene "
+        "with model: names its own (the keys package_path and xacro_args)")
+
+
+def test_simulate_takes_package_path_for_xacro_find(tmp_path, run):
+    pytest.importorskip("xacro")
+    (tmp_path / "ros" / "mypkg").mkdir(parents=True)
+    path = tmp_path / "robot" / "arm.urdf.xacro"
+    path.parent.mkdir()
+    path.write_text(ARM.replace('<link name="base"/>',
+                                '<link name="base"><visual><geometry><mesh filename='
+                                '"$(find mypkg)/base.obj"/></geometry></visual></link>'))
+    line = _one_error(run("simulate", path, "--duration", "0"))
+    assert line.startswith(f"{path}: $(find mypkg): cannot find package 'mypkg'")
+    assert line.endswith("give --package-path DIR (the folder holding mypkg/) or set "
+                         "ROS_PACKAGE_PATH")
+    result = run("simulate", path, "--duration", "0", "--json", "--package-path",
+                 tmp_path / "ros")
+    assert result.exit_code == 0, result.stderr

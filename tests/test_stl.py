@@ -14,7 +14,7 @@ import threading
 import numpy as np
 import pytest
 
-from massprops.errors import MeshFormatError
+from massprops.errors import MeshFileError, MeshFormatError
 from massprops.io import read_mesh, stl
 
 RNG = np.random.default_rng(7)
@@ -101,19 +101,21 @@ def test_a_file_that_shrinks_while_read_falls_back_to_the_size_check(tmp_path, m
         read_mesh(path)
 
 
-def test_a_binary_stl_from_a_named_pipe_is_read_once(tmp_path):
-    """A pipe (e.g. bash's <(cat x.stl)) cannot be read twice: nothing may be read ahead."""
-    data = packed(triangles(3))
+def test_a_binary_stl_from_a_named_pipe_is_refused_unopened(tmp_path):
+    """A pipe (e.g. bash's <(cat x.stl)) is a special file: refused before it is opened, even
+    with a writer waiting (issue 30; standard input, '-', is the way to stream a mesh)."""
     fifo = tmp_path / "pipe.stl"
     os.mkfifo(fifo)
-    # daemon, joined with a timeout: if the read fails before opening the pipe, the writer would
-    # block in open() forever and keep the test process from exiting
-    writer = threading.Thread(target=fifo.write_bytes, args=(data,), daemon=True)
+    # daemon: the writer blocks in open() until a reader comes, which massprops never is
+    writer = threading.Thread(target=fifo.write_bytes, args=(packed(triangles(3)),), daemon=True)
     writer.start()
-    mesh = read_mesh(fifo)
+    with pytest.raises(MeshFileError, match="pipe.stl: is a named pipe"):
+        read_mesh(fifo)
+    assert writer.is_alive()  # nobody opened the pipe for reading
+    with open(fifo, "rb") as release:  # let the writer finish
+        release.read()
     writer.join(timeout=10)
     assert not writer.is_alive()
-    assert mesh.vertices.tobytes() == decoded(data).tobytes()
 
 
 @pytest.mark.timeout(10)

@@ -15,8 +15,9 @@ Rules (deterministic, so a run is reproducible and diffable):
   line is dropped; each entry is then treated like an argument, except that it is never
   globbed (a name from a list is a name).
 
-A directory without any mesh file, an unlistable directory or an unreadable list yields a
-`BadInput` at its place, so the batch reports it and goes on.
+A directory without any mesh file, an unlistable directory, an unreadable list, or a special
+file (a named pipe, a socket, a device) with a mesh's name in a directory yields a `BadInput`
+at its place, so the batch reports it (never opening it) and goes on.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from functools import lru_cache
 from typing import BinaryIO, NamedTuple
 
 from massprops.errors import MeshFileError, setting_ref
+from massprops.files import check_input_file
 
 _GLOB_CHARS = frozenset("*?[")
 _LIST_BLOCK = 1 << 16
@@ -140,7 +142,25 @@ def _walk(folder: str, recursive: bool) -> Iterator[str | BadInput]:
         first = secondary.get(ext)
         if first is not None and (stem + first in names or stem + first.upper() in names):
             continue  # NAME.fac beside NAME.vtx: the pair is one mesh, listed once
-        yield path
+        special = _special(entry, path)
+        yield path if special is None else BadInput(path, special)
+
+
+def _special(entry: os.DirEntry, path: str) -> MeshFileError | None:
+    """The error for a directory entry with a mesh's name that is a special file (a named
+    pipe, a socket, a device: never opened, `massprops.files`), else None (a regular file; a
+    broken link is left for the reader to report)."""
+    try:
+        if entry.is_file():
+            return None
+        entry.stat()  # a broken link raises here
+    except OSError:
+        return None
+    try:
+        check_input_file(path)
+    except MeshFileError as exc:
+        return exc
+    return None
 
 
 def _list_entries(files_from: str, null: bool, stdin: BinaryIO | None

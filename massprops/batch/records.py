@@ -7,7 +7,7 @@ import sys
 from dataclasses import dataclass, field
 from typing import Any
 
-from massprops.errors import error_message, exit_code
+from massprops.errors import error_message, exit_code, format_traceback
 
 
 @dataclass(frozen=True)
@@ -28,10 +28,8 @@ class ErrorInfo:
 
     @classmethod
     def of(cls, exc: BaseException, *, keep: bool = False) -> ErrorInfo:
-        import traceback  # only a failure pays for it
-
-        text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
-        return cls(error_message(exc), exit_code(exc), text, exc if keep else None)
+        return cls(error_message(exc), exit_code(exc), format_traceback(exc),
+                   exc if keep else None)
 
     def __getstate__(self) -> dict:
         return {"message": self.message, "exit_code": self.exit_code,

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import signal
+import warnings
 from typing import Any
 
 from massprops.batch.records import MeshResult, inspect_one
@@ -16,8 +17,10 @@ from massprops.batch.records import MeshResult, inspect_one
 def init_local_worker() -> None:
     """Start-up of a local pool's worker: Ctrl-C in a terminal reaches the whole process group,
     and the parent alone decides what happens then (it stops the workers), so the workers ignore
-    it instead of each printing a traceback."""
+    it instead of each printing a traceback. Python's warnings are ignored too: a worker's
+    stderr is the user's terminal, where the parent prints one line per problem."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    warnings.simplefilter("ignore")
 
 
 def run_chunk(cwd: str, paths: list[str], options: dict[str, Any], chdir: bool,

@@ -11,6 +11,7 @@ import numpy as np
 from massprops.cad.integrate import SolidIntegral, integrate_solid
 from massprops.cad.read import CadFile, CadSolid, read_cad
 from massprops.errors import MeshTopologyError, SceneError, UsageError, setting_ref
+from massprops.files import read_input
 from massprops.inertia import parallel_axis, principal_axes, rotate_inertia
 from massprops.mesh.facesums import U
 from massprops.mesh.integral import (
@@ -98,12 +99,11 @@ def load_density_map(path: str | os.PathLike) -> list[tuple[str, float]]:
     import yaml  # a core dependency, only needed with --density-map
 
     name = os.fspath(path)
+    text = read_input(name, what="a density map (YAML)")
     try:
-        with open(name, encoding="utf-8") as fh:
-            data = yaml.safe_load(fh)
-    except OSError as exc:
-        raise SceneError(f"{name}: cannot read the density map ({exc.strerror}); check the "
-                         "path") from exc
+        data = yaml.safe_load(text.decode("utf-8-sig"))
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"{name}: not UTF-8 text (byte {exc.start}); save it as UTF-8") from exc
     except yaml.YAMLError as exc:
         raise SceneError(f"{name}: not valid YAML ({exc}); expected 'name: density' lines") \
             from exc
@@ -165,7 +165,7 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
     results = []
     for k, (solid, integral, rho) in enumerate(zip(cad.solids, integrals, densities)):
         props = properties_from_moments(integral.origin, integral.moments, density=rho,
-                                        mass=None)
+                                        mass=None, name=f"{cad.name}: {solid.name}")
         repairs = None
         if shells:
             bar, record = shells[k]

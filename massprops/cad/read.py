@@ -18,12 +18,12 @@ import numpy as np
 from massprops.cad.labels import colour, iges_name, label_name, material
 from massprops.cad.occ import quiet_stdout, require_occ
 from massprops.errors import (
-    MeshFileError,
     MeshFormatError,
     UnknownFormatError,
     UsageError,
     setting_ref,
 )
+from massprops.files import check_input_file
 
 __all__ = ["CadFile", "CadSolid", "UNIT_METRES", "read_cad"]
 
@@ -91,8 +91,7 @@ def read_cad(path: str | os.PathLike, *, unit: str | None = None) -> CadFile:
     if fmt is None:
         raise UnknownFormatError(f"{name}: not a CAD file extension ({ext!r}); expected .step, "
                                  ".stp, .iges, .igs or .brep")
-    if not os.path.isfile(name):
-        raise MeshFileError(f"{name}: no such file; check the path")
+    check_input_file(name, what="a CAD file")  # OpenCASCADE opens it by its path
     if unit is not None and unit not in UNIT_METRES:
         raise UsageError(f"{name}: unknown unit {unit!r}; expected one of {sorted(UNIT_METRES)}")
     require_occ(name)

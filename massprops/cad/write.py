@@ -13,9 +13,10 @@ import numpy as np
 
 from massprops.cad.inspect import CadInspection
 from massprops.errors import MeshFileError
-from massprops.io.atomic import atomic_write_bytes, check_destination
+from massprops.io.atomic import OutputKind, atomic_write_bytes, check_output
+from massprops.io.dispatch import mesh_output
 
-__all__ = ["CadAlignment", "align_cad", "ALIGN_DEFLECTION"]
+__all__ = ["CadAlignment", "align_cad", "cad_output", "ALIGN_DEFLECTION"]
 
 ALIGN_DEFLECTION = 1e-3
 """Mesh outputs of ``align``: the chord deflection as a fraction of each solid's largest half
@@ -42,6 +43,12 @@ class CadAlignment:
                 "tessellated": self.tessellated}
 
 
+def cad_output() -> OutputKind:
+    """The output rule's `OutputKind` for ``align`` of a CAD file: exact geometry (STEP, IGES,
+    BREP) or a tessellated mesh in any format massprops writes."""
+    return OutputKind("an aligned part", tuple(sorted({*_EXACT, *mesh_output().extensions})))
+
+
 def align_cad(result: CadInspection, output: str | os.PathLike, *, force: bool = False
               ) -> CadAlignment:
     """Write the file's solids moved by v ↦ Rᵀ(v − c), R and c of the whole (the total, or the
@@ -51,8 +58,7 @@ def align_cad(result: CadInspection, output: str | os.PathLike, *, force: bool =
     r = props.principal_axes
     c = props.center_of_mass
     cad = result.file
-    target = Path(os.fspath(output))
-    check_destination(target, force=force, protect=[Path(cad.name)])
+    target = check_output(output, cad_output(), force=force, protect=[cad.name])
     moved = [_moved(s.solid.shape, c / cad.scale, r) for s in result.solids]
     kind = _EXACT.get(target.suffix.lower())
     if kind is None:

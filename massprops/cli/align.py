@@ -35,7 +35,9 @@ def align(ctx: click.Context, input_path: str, output_path: str, force: bool, as
         from massprops.inspection.align import align_mesh
         from massprops.inspection.file import inspect_file
         from massprops.io import write_mesh
+        from massprops.io.dispatch import check_mesh_output
 
+        check_mesh_output(output_path, force=force, protect=(input_path,))  # before any work
         result = inspect_file(input_path, **options)
         for w in result.warnings:
             say_warning(result.mesh.name, w)

@@ -10,6 +10,7 @@ import click
 from massprops.cli.common import (
     ELEMENT_FORMATS,
     StdoutClosed,
+    check_outputs,
     emit_json,
     guarded,
     say_warning,
@@ -120,8 +121,9 @@ def align_cad_file(ctx: click.Context, input_path: str, output_path: str, force:
     def run() -> None:
         # the CAD branch of the library: imported only when a CAD file is named
         from massprops.cad.inspect import inspect_cad
-        from massprops.cad.write import align_cad
+        from massprops.cad.write import align_cad, cad_output
 
+        check_outputs([(output_path, cad_output())], force=force, inputs=[input_path])
         repairs = options.get("repairs")
         if repairs is not None and (repairs.union or repairs.fill_holes):
             raise click.UsageError("--fill-holes and --union apply to meshes, not to CAD files")

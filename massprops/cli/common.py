@@ -9,12 +9,12 @@ import json
 import os
 import re
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import click
 
-from massprops.errors import error_message, exit_code, render_settings
+from massprops.errors import error_message, exit_code, format_traceback, render_settings
 
 UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")
 """The keys of massprops.io.UNITS, written out so that building the CLI does not import the
@@ -83,6 +83,12 @@ def fitted(message: str) -> str:
                        scene=ctx.info_name in SCENE_COMMANDS)
 
 
+def say_traceback(text: str) -> None:
+    """--debug: a traceback (`massprops.errors.format_traceback`, or a worker's) on stderr, the
+    settings its messages name said as this command's options, as the one-line errors are."""
+    click.echo(fitted(cli_text(text)).rstrip("\n"), err=True)
+
+
 def say_note(message: str) -> None:
     """A note on stderr while something slow and one-off happens (never on --json stdout)."""
     click.echo(f"massprops: {message}", err=True)
@@ -98,9 +104,7 @@ def guarded(ctx: click.Context, fn: Callable[[], Any]) -> int:
         raise
     except Exception as exc:  # ours, a bug or an environment failure: one line, no traceback
         if ctx.obj.get("debug"):
-            import traceback
-
-            traceback.print_exc()
+            say_traceback(format_traceback(exc))
             return exit_code(exc)
         say_error(error_message(exc))
         return exit_code(exc)
@@ -112,6 +116,59 @@ def emit_json(obj: dict) -> None:
     if "\\u001f" in text:  # a message of the library's naming a setting (see `flag`)
         text = re.sub(r"\\u001f([a-z_.]+)\\u001f", lambda m: flag(m[1]), text)
     click.echo(text)
+
+
+class RegistryChoice(click.ParamType):
+    """A choice whose values come from a registry, loaded on first use, so that building the
+    command line never imports what only one command needs (numba for the integrators, the
+    readers for the formats). ``normalize`` turns a value into the registry's key (formats:
+    case-insensitive, a leading dot allowed). A value not in the registry is a usage error
+    (exit 2) listing the registry's values."""
+
+    name = "choice"
+
+    def __init__(self, loader: Callable[[], Sequence[str]],
+                 normalize: Callable[[str], str] | None = None) -> None:
+        self.loader, self.normalize = loader, normalize
+
+    def get_metavar(self, *args: Any, **kwargs: Any) -> str:
+        return "[" + "|".join(self.loader()) + "]"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> str:
+        choices = self.loader()
+        key = value if self.normalize is None else self.normalize(value)
+        if key not in choices:
+            self.fail(f"{value!r} is not one of {', '.join(choices)}", param, ctx)
+        return key
+
+
+def _input_formats() -> list[str]:
+    # deferred: the readers' registry, only when --input-format is given
+    from massprops.io import input_formats
+
+    return input_formats()
+
+
+def _format_key(name: str) -> str:
+    # deferred: the readers' registry, only when --input-format is given
+    from massprops.io.registry import format_key
+
+    return format_key(name)
+
+
+def check_outputs(outputs: Sequence[tuple[str | None, Any]], *, force: bool,
+                  inputs: Sequence[str]) -> None:
+    """The output rule (`massprops.io.atomic`: an extension the command can write, no input,
+    not existing without --force, a writable folder) for every (path, `OutputKind`) a command
+    will write, before any work; a path None is not asked for. No output may be another."""
+    # deferred: only a command that writes files needs the rule
+    from massprops.io.atomic import check_output
+
+    written: list[str] = []
+    for path, kind in outputs:
+        if path:
+            check_output(path, kind, force=force, protect=[*inputs, *written])
+            written.append(path)
 
 
 def positive(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
@@ -152,8 +209,10 @@ def mass_options(f: Callable) -> Callable:
         click.option("--allow-open", is_flag=True,
                      help="Compute an open mesh anyway (the result is then ill-defined; "
                           "warnings say by how much)."),
-        click.option("--input-format", default=None,
-                     help="Format of the input (required for '-' = standard input)."),
+        click.option("--input-format", default=None, metavar="FORMAT",
+                     type=RegistryChoice(_input_formats, _format_key),
+                     help="Format of the input, a name of the formats massprops reads (obj, "
+                          "stl, ply, ...; required for '-' = standard input)."),
         *_repair_flags(),
     ]):
         f = opt(f)
@@ -175,6 +234,40 @@ def _repair_flags() -> list:
                      help="The surface as a wall of this thickness, in METRES whatever --unit "
                           "says (mid-surface model; open and flat surfaces too)."),
     ]
+
+
+def robot_file_options(f: Callable) -> Callable:
+    """--package-path / --xacro-arg: how a robot description's references resolve, shared by
+    model and simulate (a description given directly; a `model:` scene has the keys
+    package_path and xacro_args). --xacro-arg arrives as a dict NAME -> VALUE."""
+    for opt in reversed([
+        click.option("--package-path", "package_paths", multiple=True, metavar="DIR",
+                     help="Folder holding packages for package:// and model:// (repeatable; "
+                          "ROS_PACKAGE_PATH is searched too)."),
+        click.option("--xacro-arg", "xacro_args", multiple=True, metavar="NAME:=VALUE",
+                     callback=_xacro_args,
+                     help="An argument for a .xacro FILE (repeatable), as `xacro FILE "
+                          "NAME:=VALUE`: the value of $(arg NAME)."),
+    ]):
+        f = opt(f)
+    return f
+
+
+def _xacro_args(ctx: click.Context, param: click.Parameter,
+                values: tuple[str, ...]) -> dict[str, str]:
+    if not values:
+        return {}
+    # deferred: the xacro rules load only when an argument is given
+    from massprops.robot.formats.xacro_run import parse_xacro_arg
+
+    out = {}
+    for text in values:
+        try:
+            name, value = parse_xacro_arg(text)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc)) from exc
+        out[name] = value
+    return out
 
 
 def repair_flags(f: Callable) -> Callable:

@@ -3,33 +3,23 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
 from typing import Any
 
 import click
 
 from massprops.cli.app import cli
-from massprops.cli.common import emit_json, guarded, positive, say_note, say_notes, say_warning
+from massprops.cli.common import (
+    RegistryChoice,
+    check_outputs,
+    emit_json,
+    guarded,
+    positive,
+    robot_file_options,
+    say_note,
+    say_notes,
+    say_warning,
+)
 from massprops.errors import ComputationError
-
-
-class RegistryChoice(click.ParamType):
-    """A choice whose values come from a registry, loaded on first use, so that building the
-    command line never imports what only one command needs (numba for the integrators)."""
-
-    name = "choice"
-
-    def __init__(self, loader: Callable[[], tuple[str, ...]]) -> None:
-        self.loader = loader
-
-    def get_metavar(self, *args: Any, **kwargs: Any) -> str:
-        return "[" + "|".join(self.loader()) + "]"
-
-    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> str:
-        choices = self.loader()
-        if value not in choices:
-            self.fail(f"{value!r} is not one of {', '.join(choices)}", param, ctx)
-        return value
 
 
 def _integrator_names() -> tuple[str, ...]:
@@ -88,19 +78,24 @@ class _Progress:
 @click.option("--duration", type=click.FloatRange(min=0), default=None,
               help="Seconds to run (overrides time.duration; 0, for a system or a robot "
                    "description: the start pose's reactions and holding torques).")
+@robot_file_options
 @click.pass_context
 def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: str | None,
              integrator: str | None, rtol: float | None, step: float | None,
              every: float | None, plot_path: str | None, force: bool, quiet: bool,
-             max_steps: int | None, duration: float | None) -> None:
+             max_steps: int | None, duration: float | None, package_paths: tuple[str, ...],
+             xacro_args: dict[str, str]) -> None:
     """Integrate the Newton-Euler equations of the one body in SCENE (YAML, SI units), of a
-    system of bodies, or of a robot description (ROBOT.urdf|.sdf|.xml) under gravity."""
+    system of bodies, or of a robot description (ROBOT.urdf|.sdf|.xml|.xacro) under gravity."""
     interrupted = []
 
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
         from massprops.dynamics.compiled.compiling import whole_process
+        from massprops.dynamics.systems.robot_scene import check_description_settings
 
+        check_description_settings(scene_path, package_paths, xacro_args)
+        _check_run_outputs(output_path, plot_path, force, [scene_path])
         if plot_path:
             # deferred: matplotlib (the plot extra) loads only for --plot
             from massprops.dynamics.plots import require_matplotlib
@@ -109,7 +104,8 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         if _is_system(scene_path):  # `bodies:`, `model:` or a description: the systems package
             whole_process()  # numba started lean: this process runs massprops alone
             if _simulate_system(scene_path, as_json, output_path, integrator, rtol, step, every,
-                                force, plot_path, duration, max_steps, quiet):
+                                force, plot_path, duration, max_steps, quiet,
+                                {"package_paths": package_paths, "xacro_args": xacro_args}):
                 interrupted.append(True)
             return
         # deferred: the one-body run's modules, not a system's
@@ -128,6 +124,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
         if sampling is None and (out or plot_path):
             sampling = scene.time.duration / 1000
         protect = [scene_path, *scene.input_files]
+        _check_run_outputs(out, plot_path, force, protect)  # now with the scene's files
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
         whole_process()
         try:
@@ -182,6 +179,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
         from massprops.dynamics.precision import precision as run_ladders
         from massprops.dynamics.scene import load_scene
 
+        _check_run_outputs(None, plot_path, force, [scene_path])
         if plot_path:
             # deferred: matplotlib (the plot extra) loads only for --plot
             from massprops.dynamics.plots import require_matplotlib
@@ -195,6 +193,7 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
             scene = load_any_system(scene_path)
         else:
             scene = load_scene(scene_path)
+        _check_run_outputs(None, plot_path, force, [scene_path, *scene.input_files])
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
         whole_process()
         try:
@@ -205,6 +204,17 @@ def precision(ctx: click.Context, scene_path: str, as_json: bool, plot_path: str
         _emit_precision(report, scene_path, plot_path, as_json, force, scene.input_files)
 
     ctx.exit(guarded(ctx, run))
+
+
+def _check_run_outputs(trajectory_path: Any, plot_path: str | None, force: bool,
+                       inputs: list) -> None:
+    """The output rule for a run's trajectory and plot, before the run (`check_outputs`)."""
+    # deferred: the outputs' kinds, only where the run writes files
+    from massprops.dynamics.plots import plot_output
+    from massprops.dynamics.trajectory import trajectory_output
+
+    check_outputs([(trajectory_path and str(trajectory_path), trajectory_output()),
+                   (plot_path, plot_output())], force=force, inputs=[str(p) for p in inputs])
 
 
 def _save(result: Any, trajectory_path: Any, plot_path: str | None, force: bool,
@@ -236,30 +246,24 @@ def _one_body_duration(scene: Any, scene_path: str, duration: float) -> Any:
 
 def _is_system(scene_path: str) -> bool:
     # deferred: start-up cost
-    from massprops.dynamics.systems.robot_scene import is_description
-    from massprops.dynamics.systems.scene import is_system_text
+    from massprops.dynamics.systems.robot_scene import is_system_file
 
-    if is_description(scene_path):
-        return True
-    try:
-        with open(scene_path, encoding="utf-8-sig") as handle:
-            return is_system_text(handle.read())
-    except (OSError, UnicodeDecodeError):  # the one-body reader reports it
-        return False
+    return is_system_file(scene_path)
 
 
 def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
                      integrator: str | None, rtol: float | None, step: float | None,
                      every: float | None, force: bool, plot_path: str | None = None,
                      duration: float | None = None, max_steps: int | None = None,
-                     quiet: bool = False) -> bool:
-    """A system scene or a robot description: run, write the trajectory, print JSON or a short
-    summary; True when Ctrl-C stopped the run (what it computed is written and printed)."""
+                     quiet: bool = False, description: dict | None = None) -> bool:
+    """A system scene or a robot description (``description``: its package_paths and
+    xacro_args): run, write the trajectory, print JSON or a short summary; True when Ctrl-C
+    stopped the run (what it computed is written and printed)."""
     # deferred, as the one-body path's imports: only a system scene needs them
     from massprops.dynamics.systems.robot_scene import load_any_system
     from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
 
-    scene = load_any_system(scene_path, duration)
+    scene = load_any_system(scene_path, duration, **(description or {}))
     for w in scene.warnings:
         say_warning(scene_path, w)
     out = output_path or scene.output.file
@@ -268,6 +272,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
         sampling = scene.time.duration / 1000
     progress = _Progress(enabled=not quiet and sys.stderr.isatty())
     protect = [scene_path, *scene.input_files]
+    _check_run_outputs(out, plot_path, force, protect)  # now with the scene's files
     try:
         result = simulate_system(scene, integrator=integrator, rtol=rtol, step=step,
                                  every=sampling, notice=say_note, max_steps=max_steps,

@@ -6,13 +6,16 @@ import click
 
 from massprops.cli.app import cli
 from massprops.cli.common import (
+    check_outputs,
     emit_json,
     guarded,
     non_negative,
     positive,
     repair_flags,
     repair_options,
+    robot_file_options,
     say_error,
+    say_note,
     say_warning,
 )
 
@@ -25,45 +28,40 @@ from massprops.cli.common import (
               help="Exit 4 if any link's stated inertial differs from its geometry by more than "
                    "RTOL (mass, COM / link size, inertia in the 2-norm; all relative).")
 @click.option("--write", "output_path", default=None, metavar="OUT",
-              help="Write the description with the computed inertials (never over FILE).")
+              help="Write the description with the inertials that are off replaced by the "
+                   "computed ones (missing, invalid, or off by more than --check RTOL, default "
+                   "1e-12); every other byte as in FILE (never over FILE).")
 @click.option("--force", is_flag=True, help="Replace OUT if it exists (never FILE).")
 @click.option("--from", "source", type=click.Choice(("collision", "visual")), default=None,
               help="Which geometry makes every link (default: collision, or visual for a link "
                    "with no collision geometry, noted as source: visual).")
 @click.option("--density", type=float, callback=positive,
               help="Density in kg/m³ for every geometry (default: keep each stated mass).")
-@click.option("--package-path", "package_paths", multiple=True, metavar="DIR",
-              help="Folder holding packages for package:// and model:// (repeatable; "
-                   "ROS_PACKAGE_PATH is searched too).")
+@robot_file_options
 @click.option("--allow-open", is_flag=True, help="Compute open meshes anyway (with warnings).")
 @repair_flags
-@click.option("--xacro-arg", "xacro_args", multiple=True, metavar="NAME:=VALUE",
-              help="An argument for a .xacro FILE (repeatable), as `xacro FILE NAME:=VALUE`.")
 @click.pass_context
 def model(ctx: click.Context, description: str, as_json: bool, rtol: float | None,
           output_path: str | None, force: bool, source: str | None, density: float | None,
           package_paths: tuple[str, ...], allow_open: bool, fill_holes: bool,
           max_hole: float | None, union: bool, shell: float | None,
-          xacro_args: tuple[str, ...]) -> None:
+          xacro_args: dict[str, str]) -> None:
     """Inertials of every link of a robot description (URDF, SDF, MJCF or .xacro FILE) from its
     meshes and primitives, against the inertials it states. Repairs apply to each mesh."""
     link_errors = []
     repairs = repair_options(fill_holes, max_hole, union, shell)
-    mappings = {}
-    for arg in xacro_args:
-        name, sep, value = arg.partition(":=")
-        if not sep or not name:
-            raise click.BadParameter(f"expected NAME:=VALUE, got {arg!r}",
-                                     param_hint="--xacro-arg")
-        mappings[name] = value
 
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
         from massprops.robot.analyze import analyze_model
+        from massprops.robot.write.writeback import description_output
+
+        check_outputs([(output_path, description_output(description))], force=force,
+                      inputs=[description])
 
         report = analyze_model(description, source=source or "auto", density=density,
                                package_paths=package_paths, allow_open=allow_open,
-                               xacro_args=mappings, repairs=repairs)
+                               xacro_args=xacro_args, repairs=repairs)
         for w in report.model.warnings:
             say_warning(description, w)
         for line in report.errors:
@@ -78,9 +76,24 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
 
             print_model(report, rtol)
         if output_path is not None:
-            report.write(output_path, force=force)
+            written = report.write(output_path, force=force, rtol=rtol)
+            say_note(_rewritten(output_path, written, report, rtol))
         if rtol is not None:
             report.require_agreement(rtol)
 
     code = guarded(ctx, run)
     ctx.exit(max(code, 1 if link_errors else 0))
+
+
+def _rewritten(output_path: str, written: tuple[str, ...], report, rtol: float | None) -> str:
+    """The note --write leaves on stderr: which links' inertials OUT has new."""
+    from massprops.tolerances import WRITE_KEEP_RTOL  # the default, said with the note
+
+    computed = sum(r.computed is not None for r in report.links)
+    within = f"within {WRITE_KEEP_RTOL if rtol is None else rtol:g} of the geometry"
+    if not written:
+        return f"wrote {output_path}: every computed inertial agrees {within}; none rewritten"
+    kept = computed - len(written)
+    return (f"wrote {output_path}: rewrote the inertial of {', '.join(written)} "
+            f"({len(written)} of {computed} computed link(s)"
+            + (f"; the other {kept} agree {within} and are kept)" if kept else ")"))

@@ -26,17 +26,29 @@ def _pyplot():
     return plt
 
 
+PLOT_EXTENSIONS: tuple[str, ...] = (".png",)
+"""The format of every figure (``--plot``)."""
+
+
+def plot_output():
+    """The output rule's `OutputKind` for a figure (`massprops.io.atomic`)."""
+    from massprops.io.atomic import OutputKind  # deferred: only when a figure is saved
+
+    return OutputKind("a plot", PLOT_EXTENSIONS, "plot")
+
+
 def save_figure(fig, path: str | Path, *, force: bool = False, protect=()) -> None:
-    """Render ``fig`` as PNG and write it atomically (never over an input or, without force, an
-    existing file)."""
+    """Render ``fig`` as PNG and write it atomically under the output rule (a .png name, never
+    over an input or, without force, an existing file)."""
     # deferred: file writing is needed only when a figure is saved
     import io
 
-    from massprops.io.atomic import atomic_write_bytes
+    from massprops.io.atomic import atomic_write_bytes, check_output
 
+    path = check_output(path, plot_output(), force=force, protect=protect)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=120)
-    atomic_write_bytes(Path(path), buf.getvalue(), force=force, protect=protect)
+    atomic_write_bytes(path, buf.getvalue(), force=force, protect=protect)
 
 
 def plot_simulation(result, path: str | Path, *, force: bool = False, protect=()) -> None:

@@ -34,6 +34,7 @@ from massprops.dynamics.model import (
     TimeSettings,
     Torque,
 )
+from massprops.dynamics.trajectory import TRAJECTORY_EXTENSIONS
 from massprops.dynamics.yamlnodes import (
     Field,
     compose,
@@ -53,14 +54,15 @@ from massprops.dynamics.yamlnodes import (
     readonly_array,
     shown,
 )
-from massprops.errors import InputError, SceneError, UnphysicalInertiaError
+from massprops.errors import InputError, MeshFileError, SceneError, UnphysicalInertiaError
+from massprops.files import file_problem, read_input
 
 __all__ = ["FORCE_TYPES", "FRAMES", "OUTPUT_SUFFIXES", "load_scene",
            "parse_scene"]
 
 
 FRAMES: tuple[str, ...] = ("world", "body")
-OUTPUT_SUFFIXES: tuple[str, ...] = (".csv", ".npz")
+OUTPUT_SUFFIXES: tuple[str, ...] = TRAJECTORY_EXTENSIONS
 
 
 # --- the body -----------------------------------------------------------------------------------
@@ -132,8 +134,8 @@ def _mesh_body_spec(fields: dict[str, Field], base_dir: Path) -> _MeshBodySpec:
 def _existing_file(field: Field, base_dir: Path) -> Path:
     """A path relative to the scene file's folder (or absolute) that names an existing file."""
     path = base_dir / read_string(field, "a file name")
-    if not path.is_file():
-        problem = "is not a file" if path.exists() else "does not exist"
+    problem = file_problem(path)
+    if problem is not None:
         raise field.error(f"{path} {problem}; relative paths start at the scene file's folder")
     return path
 
@@ -180,10 +182,12 @@ def _as_scene_key(name: str) -> str:
     return f"{name}: true" if name in ("allow_open", "fill_holes", "union") else name
 
 
-def _with_place(exc: InputError, field: Field) -> InputError:
+def _with_place(exc: InputError, field: Field,
+                say: Callable[[str], str] = _as_scene_key) -> InputError:
     """The same error class (so callers can still tell an open mesh from a bad scene), its
-    message prefixed with the scene file, line and key path."""
-    message = one_line(field.where() + exc.render(_as_scene_key))
+    message prefixed with the scene file, line and key path, the settings it names said by
+    ``say`` (default: as a mesh body's keys)."""
+    message = one_line(field.where() + exc.render(say))
     try:
         return type(exc)(message)
     except TypeError:  # a subclass with a different constructor
@@ -326,7 +330,7 @@ def _output(field: Field | None, base_dir: Path) -> OutputSettings:
     path = None
     if "file" in fields:
         path = base_dir / read_string(fields["file"], "a file name ending in .csv or .npz")
-        if path.suffix not in OUTPUT_SUFFIXES:
+        if path.suffix.lower() not in OUTPUT_SUFFIXES:
             raise fields["file"].error(f"expected a name ending in .csv or .npz, got {path.name!r}")
         if not path.parent.is_dir():
             raise fields["file"].error(f"folder {path.parent} does not exist; create it first "
@@ -389,14 +393,21 @@ def load_scene(path: str | os.PathLike[str], *,
                known_integrators: Sequence[str] | None = None) -> Scene:
     """Read and validate the scene file at ``path`` (UTF-8 YAML); see ``parse_scene``."""
     path = Path(path)
+    return parse_scene(scene_text(path), source=os.fspath(path), base_dir=path.parent,
+                       known_integrators=known_integrators)
+
+
+def scene_text(path: str | os.PathLike[str]) -> str:
+    """The text of the scene file at ``path`` (UTF-8, a byte-order mark dropped); SceneError if
+    it is missing, unreadable, not a regular file (`massprops.files`) or not UTF-8."""
     source = os.fspath(path)
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError as exc:
-        raise SceneError(f"{source}: scene file not found; check the path") from exc
+        data = read_input(path, what="a scene file (YAML)")
+    except MeshFileError as exc:
+        if isinstance(exc.__cause__, FileNotFoundError):
+            raise SceneError(f"{source}: scene file not found; check the path") from exc
+        raise SceneError(exc.template) from exc
+    try:
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise SceneError(f"{source}: not UTF-8 text (byte {exc.start}); save it as UTF-8") from exc
-    except OSError as exc:
-        raise SceneError(f"{source}: cannot read the scene file: {exc.strerror}") from exc
-    return parse_scene(text, source=source, base_dir=path.parent,
-                       known_integrators=known_integrators)

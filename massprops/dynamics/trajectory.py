@@ -9,6 +9,17 @@ import numpy as np
 
 from massprops.errors import UsageError
 
+TRAJECTORY_EXTENSIONS: tuple[str, ...] = (".csv", ".npz")
+"""The formats of a trajectory file (scene ``output.file``, ``simulate --output``)."""
+
+
+def trajectory_output():
+    """The output rule's `OutputKind` for a trajectory file (`massprops.io.atomic`)."""
+    from massprops.io.atomic import OutputKind  # deferred: only when a file is written
+
+    return OutputKind("a trajectory", TRAJECTORY_EXTENSIONS, "output")
+
+
 COLUMNS = [
     ("t", "s", "t"),
     ("position", "m", ("x", "y", "z")),
@@ -73,11 +84,12 @@ def trajectory_bytes(traj, suffix: str) -> bytes:
 
 
 def write_trajectory(traj, path: str | Path, *, force: bool = False, protect=()) -> None:
-    """Write ``traj`` to ``path`` (.csv or .npz) atomically; refuses to replace an input or an
-    existing file unless ``force`` (OutputExistsError)."""
+    """Write ``traj`` to ``path`` (.csv or .npz) atomically, under the output rule
+    (`massprops.io.atomic.check_output`): UsageError for another extension, OutputExistsError
+    over an input or an existing file unless ``force``."""
     # deferred: file writing is needed only when a trajectory is saved
-    from massprops.io.atomic import atomic_write_bytes
+    from massprops.io.atomic import atomic_write_bytes, check_output
 
-    path = Path(path)
+    path = check_output(path, trajectory_output(), force=force, protect=protect)
     atomic_write_bytes(path, trajectory_bytes(traj, path.suffix.lower()), force=force,
                        protect=protect)

@@ -228,6 +228,14 @@ def read_string(field: Field, what: str = "a string") -> str:
     return node.value
 
 
+def read_strings(field: Field, what: str = "a string") -> list[tuple[Field, str]]:
+    """One string or a list of them (each non-empty), each with its field (for its line)."""
+    if not isinstance(field.node, yaml.SequenceNode):
+        return [(field, read_string(field, f"{what} or a list of them"))]
+    items = [field.child(item, i) for i, item in enumerate(field.node.value)]
+    return [(item, read_string(item, what)) for item in items]
+
+
 def read_choice(field: Field, options: Sequence[str], what: str = "value") -> str:
     """One of ``options``; an unknown word gets a did-you-mean suggestion."""
     value = read_string(field, f"one of {', '.join(options)}")

@@ -15,7 +15,7 @@ from massprops.errors import MassPropsError
 from massprops.io import read_mesh
 from massprops.mesh import Mesh
 from massprops.mesh.health import MeshHealth, prepare_mesh
-from massprops.mesh.integral import MassProperties, mass_properties
+from massprops.mesh.integral import MassProperties, check_coordinate_scale, mass_properties
 from massprops.parallel import in_background
 
 if TYPE_CHECKING:
@@ -85,10 +85,12 @@ def inspect_mesh(mesh: Mesh, *, density: float | None = None, mass: float | None
                  allow_open: bool = False, repairs: RepairOptions | None = None) -> Inspection:
     """Health-check ``mesh`` and integrate its mass properties (density default 1 kg/m³).
 
-    Errors of the health checks come first; the integral's own errors (a usage error in density
-    or mass, a degenerate volume) only for a mesh that passed them. ``repairs``: what to repair
-    first (`massprops.repair`); none asked, the repair code is never imported.
+    Coordinates too large for float64 mass properties are refused first (before any product
+    overflows); then the errors of the health checks; the integral's own errors (a usage error
+    in density or mass, a degenerate volume) only for a mesh that passed them. ``repairs``: what
+    to repair first (`massprops.repair`); none asked, the repair code is never imported.
     """
+    check_coordinate_scale(mesh)
     if repairs is not None and repairs.any:
         from massprops.repair.pipeline import repair_and_integrate  # deferred: repairs only
 

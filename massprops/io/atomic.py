@@ -1,4 +1,9 @@
-"""Safe output files: never over an input, never over an existing file unless forced, atomic.
+"""Safe output files: one rule for every file a command writes, and atomic writes.
+
+The rule (`check_output`), checked by each command before any work and again by each writer:
+the file's extension names a format of what is written (else UsageError, exit 2, naming the
+file, its extension and the accepted ones); it is no input of the command, does not exist
+unless forced, and its folder exists and is writable (`check_destination`, exit 1).
 
 A file is written to a temporary name in the target's directory (same filesystem, so the final
 rename is atomic), flushed and fsync'ed, then renamed over the target. A crash or an exception at
@@ -12,11 +17,53 @@ import os
 import stat
 from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import BinaryIO
+from typing import BinaryIO, NamedTuple
 
-from massprops.errors import MassPropsError, MeshFileError, OutputExistsError, setting_ref
+from massprops.errors import (
+    MassPropsError,
+    MeshFileError,
+    OutputExistsError,
+    UsageError,
+    setting_ref,
+)
 
 _TEMP_ATTEMPTS = 100
+
+
+class OutputKind(NamedTuple):
+    """What a command writes to one file: ``what`` in words ("a trajectory"), the
+    ``extensions`` (lower case, with the dot) of the formats it can be written in, and the
+    ``setting`` (`massprops.errors.setting_ref`) that names the file, None for an argument."""
+
+    what: str
+    extensions: tuple[str, ...]
+    setting: str | None = None
+
+
+def check_output(path: str | os.PathLike[str], kind: OutputKind, *, force: bool,
+                 protect: Iterable[str | os.PathLike[str]] = ()) -> Path:
+    """``path`` as a Path once it passes the rule (the module docstring): UsageError for an
+    extension ``kind`` cannot be written in; then `check_destination`."""
+    path = check_extension(path, kind)
+    check_destination(path, force=force, protect=[Path(os.fspath(p)) for p in protect])
+    return path
+
+
+def check_extension(path: str | os.PathLike[str], kind: OutputKind) -> Path:
+    """``path`` as a Path; UsageError naming it, its extension and the accepted ones unless its
+    extension (case-insensitive) is one of ``kind``'s."""
+    path = Path(os.fspath(path))
+    if path.suffix.lower() not in kind.extensions:
+        given = f"as {path.suffix!r}" if path.suffix else "without an extension"
+        where = "" if kind.setting is None else f" ({setting_ref(kind.setting)})"
+        raise UsageError(f"{path}: cannot write {kind.what} {given}{where}; expected "
+                         f"{_choices(kind.extensions)}")
+    return path
+
+
+def _choices(extensions: Iterable[str]) -> str:
+    names = sorted(extensions)
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} or {names[-1]}"
 
 
 def atomic_write_bytes(
@@ -25,11 +72,16 @@ def atomic_write_bytes(
     *,
     force: bool = False,
     protect: Iterable[str | os.PathLike[str]] = (),
+    kind: OutputKind | None = None,
 ) -> None:
     """Write ``data`` to ``path`` with every guard of this module (for non-mesh outputs such as
-    trajectories and plots): ``check_destination`` then ``atomic_write``."""
+    trajectories and plots): `check_output` (``kind`` given) or `check_destination`, then
+    `atomic_write`."""
     path = Path(path)
-    check_destination(path, force=force, protect=[Path(p) for p in protect])
+    if kind is not None:
+        check_output(path, kind, force=force, protect=protect)
+    else:
+        check_destination(path, force=force, protect=[Path(p) for p in protect])
     atomic_write(path, lambda stream: stream.write(data), overwrite=force)
 
 
@@ -38,7 +90,7 @@ def check_destination(path: Path, *, force: bool, protect: Iterable[Path]) -> No
 
     OutputExistsError if ``path`` is (resolves to, or is a link to) any path in ``protect``, even
     with ``force``, or if it exists and not ``force``; MeshFileError if it is a directory or its
-    directory does not exist.
+    directory does not exist or is not writable.
     """
     for guarded in protect:
         if same_file(path, guarded):
@@ -53,6 +105,9 @@ def check_destination(path: Path, *, force: bool, protect: Iterable[Path]) -> No
     parent = path.parent
     if not parent.is_dir():
         raise MeshFileError(f"{path}: the directory {parent} does not exist; create it first")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise MeshFileError(f"{path}: the directory {parent} is not writable; choose another "
+                            "folder or make it writable")
 
 
 def same_file(a: Path, b: Path | str | os.PathLike[str]) -> bool:

@@ -11,8 +11,8 @@ from typing import BinaryIO, Union
 import numpy as np
 
 from massprops.errors import MeshFormatError, UnknownFormatError, UsageError, setting_ref
-from massprops.io.atomic import atomic_write, check_destination
-from massprops.io.registry import UNITS, Format, format_named, format_of_path
+from massprops.io.atomic import OutputKind, atomic_write, check_destination, check_extension
+from massprops.io.registry import FORMATS, UNITS, Format, Writer, format_named, format_of_path
 from massprops.io.source import Source
 from massprops.mesh import Mesh
 
@@ -67,11 +67,7 @@ def write_mesh(
     on any failure the old file is left intact and no temporary remains.
     """
     target = Path(os.fspath(path))
-    fmt = format_of_path(target, for_writing=True)
-    files = fmt.files(target)
-    guarded = _with_companions(protect)
-    for file, _ in files:
-        check_destination(file, force=force, protect=guarded)
+    files = check_mesh_output(target, force=force, protect=protect)
     _require_finite_output(mesh, target)
     if mesh.coordinate_scale != 1.0:
         mesh = mesh.with_vertices(mesh.vertices / mesh.coordinate_scale)
@@ -79,6 +75,26 @@ def write_mesh(
         if writer is None:  # a registry entry without a writer never passes for_writing
             raise UnknownFormatError(f"{file}: no writer for this format")
         atomic_write(file, lambda stream, w=writer: w(mesh, stream), overwrite=force)
+
+
+def mesh_output() -> OutputKind:
+    """A mesh file written by ``align``: the extensions of the formats with a writer."""
+    return OutputKind("a mesh", tuple(sorted(ext for f in FORMATS.values() if f.can_write
+                                             for ext in f.extensions)))
+
+
+def check_mesh_output(path: PathLike, *, force: bool = False,
+                      protect: Sequence[PathLike] = ()) -> list[tuple[Path, Writer | None]]:
+    """The files that writing a mesh to ``path`` makes, each with its writer, once they pass
+    the output rule (`massprops.io.atomic`): an extension with a writer (else UsageError, exit
+    2), and each file (both of NAME.vtx + NAME.fac) no input, not existing unless ``force``, in
+    a writable folder. ``align`` checks this before any work, `write_mesh` again."""
+    target = check_extension(path, mesh_output())
+    files = format_of_path(target, for_writing=True).files(target)
+    guarded = _with_companions(protect)
+    for file, _ in files:
+        check_destination(file, force=force, protect=guarded)
+    return files
 
 
 def unit_scale(unit: str) -> float:

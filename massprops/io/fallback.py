@@ -12,14 +12,15 @@ import contextlib
 import io
 import os
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
 
 from massprops.errors import MeshFormatError
+from massprops.files import open_input, read_error
 from massprops.io import validate
-from massprops.io.source import Source, read_error
+from massprops.io.source import Source
 from massprops.mesh.value import Mesh, fan_triangulate
 
 _SURFACE_CELLS = ("triangle", "quad", "polygon")
@@ -33,6 +34,7 @@ class FallbackReader:
     trimesh_type: str | None
     extension: str  # for a stream spilled to a temporary file, so the libraries see its type
     float32_only: bool = False  # the format stores positions as float32 (glTF) whatever is read
+    check: Callable[[str, str], None] | None = None  # (path, name): the format's own checks
 
     def __call__(self, source: Source) -> Mesh:
         """Returns a Mesh in file units: the file's vertices (float64) and its polygonal cells
@@ -40,6 +42,8 @@ class FallbackReader:
         coordinate_dtype float32 if the file stores float32 coordinates."""
         failures = []
         with _local_path(source, self.extension) as path:
+            if self.check is not None:
+                self.check(path, source.name)
             for library, fmt, read in (
                 ("meshio", self.meshio_format, _read_meshio),
                 ("trimesh", self.trimesh_type, _read_trimesh),
@@ -166,11 +170,11 @@ def _local_path(source: Source, extension: str) -> Iterator[str]:
 
 def _require_readable(source: Source) -> None:
     """The same MeshFileError/MeshFormatError as the own readers for missing or empty files."""
-    try:
-        with open(source.path, "rb") as f:  # type: ignore[arg-type]
+    with open_input(source.path, name=source.name) as f:  # type: ignore[arg-type]
+        try:
             empty = not f.read(1)
-    except OSError as exc:
-        raise read_error(source.name, exc) from exc
+        except OSError as exc:
+            raise read_error(source.name, exc) from exc
     if empty:
         raise MeshFormatError(f"{source.name}: the file is empty; expected a mesh")
 

@@ -1,12 +1,15 @@
-"""Writers for PLY (binary little-endian, read by the fallback) and OFF (ASCII, read by off.py)."""
+"""Writers for PLY (binary little-endian, read by the fallback) and OFF (ASCII, read by off.py);
+the PLY header's counts checked against the body before the fallback reads it."""
 
 from __future__ import annotations
 
+import os
 from typing import BinaryIO
 
 import numpy as np
 
 from massprops.errors import MeshFormatError
+from massprops.files import open_input
 from massprops.io import numtext
 from massprops.mesh import Mesh
 
@@ -66,3 +69,74 @@ def write_off(mesh: Mesh, stream: BinaryIO) -> None:
     stream.write(f"OFF\n{mesh.n_vertices} {sizes.size} 0\n".encode("ascii"))
     numtext.write_float_rows(stream, mesh.vertices)
     numtext.write_index_rows(stream, flat, sizes, with_count=True)
+
+
+_PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2,
+              "int16": 2, "uint16": 2, "int": 4, "uint": 4, "int32": 4, "uint32": 4,
+              "float": 4, "float32": 4, "double": 8, "float64": 8}
+_PLY_HEAD = 1 << 16  # a header longer than this is no mesh exporter's
+_WORDS = {"vertex": ("vertex", "vertices"), "face": ("face", "faces")}
+
+
+def check_ply_body(path: str | os.PathLike[str], name: str) -> None:
+    """MeshFormatError naming ``name`` when the PLY file's body holds fewer elements than its
+    header declares (a copy or download cut short): the libraries would read what is there and
+    report "no faces" or an open mesh instead. ASCII: one element per non-blank line; binary:
+    the elements of fixed size before the first with a list (the faces' sizes vary, meshio
+    and trimesh measure those themselves). A header this does not understand is left to them."""
+    with open_input(path, name=name) as f:
+        head = f.read(_PLY_HEAD)
+        end = head.find(b"end_header")
+        eol = head.find(b"\n", end)
+        if not head.startswith(b"ply") or end < 0 or eol < 0:
+            return
+        fmt, elements = _ply_header(head[:eol].decode("ascii", "replace"))
+        if fmt is None or not elements:
+            return
+        body = head[eol + 1:]
+        if fmt == "ascii":
+            text = (body + f.read()).strip()
+            available = text.count(b"\n") + 1 if text else 0
+            found = []
+            for _, count, _ in elements:
+                found.append(min(count, available))
+                available -= found[-1]
+        else:
+            available = os.fstat(f.fileno()).st_size - (eol + 1)
+            found = []
+            for _, count, stride in elements:
+                if stride is None:  # a list: its size is not known from the header
+                    found.append(None)
+                    available = -1
+                    continue
+                got = count if available >= count * stride else max(available, 0) // stride
+                found.append(got)
+                available = available - count * stride if available >= 0 else -1
+    if any(n is not None and n < c for (_, c, _), n in zip(elements, found)):
+        declared = " and ".join(_count(c, e) for e, c, _ in elements)
+        held = " and ".join(_count(n, e) for (e, _, _), n in zip(elements, found)
+                            if n is not None)
+        raise MeshFormatError(f"{name}: truncated: the header declares {declared}, the file "
+                              f"holds {held}; copy or export the file again")
+
+
+def _count(n: int, element: str) -> str:
+    one, many = _WORDS.get(element, (f"{element} element", f"{element} elements"))
+    return f"{n} {one if n == 1 else many}"
+
+
+def _ply_header(text: str) -> tuple[str | None, list[tuple[str, int, int | None]]]:
+    """(format, [(element, count, bytes per element or None with a list property)])."""
+    fmt, elements = None, []
+    for line in text.splitlines():
+        words = line.split()
+        if len(words) >= 2 and words[0] == "format":
+            fmt = words[1]
+        elif len(words) == 3 and words[0] == "element" and words[2].isdigit():
+            elements.append([words[1], int(words[2]), 0])
+        elif words[:1] == ["property"] and elements:
+            size = _PLY_SIZES.get(words[1]) if len(words) == 3 else None
+            last = elements[-1]
+            last[2] = None if size is None or last[2] is None else last[2] + size
+    return fmt, [(e, c, stride) for e, c, stride in elements]
+

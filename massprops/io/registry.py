@@ -70,7 +70,8 @@ FORMATS: dict[str, Format] = {
     "vf": Format((".vf",), vf.read_vf, vf.write_vf),
     "vtx": Format((".vtx", ".fac"), vf.read_vtx_fac,
                   parts=((".vtx", vf.write_vtx), (".fac", vf.write_fac))),
-    "ply": Format((".ply",), FallbackReader("ply", "ply", ".ply"), ply_off.write_ply),
+    "ply": Format((".ply",), FallbackReader("ply", "ply", ".ply", check=ply_off.check_ply_body),
+                  ply_off.write_ply),
     "off": Format((".off",), off.read_off, ply_off.write_off),
     "vtk": Format((".vtk",), FallbackReader("vtk", None, ".vtk")),
     "vtu": Format((".vtu",), FallbackReader("vtu", None, ".vtu")),
@@ -91,9 +92,14 @@ def output_formats() -> list[str]:
     return sorted(name for name, fmt in FORMATS.items() if fmt.can_write)
 
 
+def format_key(name: str) -> str:
+    """The key of ``FORMATS`` that ``name`` means: case-insensitive, a leading dot allowed."""
+    return name.lower().lstrip(".")
+
+
 def format_named(name: str) -> Format:
-    """The format called ``name`` (case-insensitive, a leading dot allowed)."""
-    key = name.lower().lstrip(".")
+    """The format called ``name`` (`format_key`)."""
+    key = format_key(name)
     if key not in FORMATS:
         raise UnknownFormatError(
             f"unknown format {name!r}; expected one of: {', '.join(sorted(FORMATS))}"

@@ -1,4 +1,8 @@
-"""Where a mesh's bytes come from (a path or a binary stream), and the errors of getting them."""
+"""Where a mesh's bytes come from (a path or a binary stream), and the errors of getting them.
+
+A path is read by `massprops.files.read_input` (regular files only, as every input of
+massprops); a stream (standard input, ``-``) as it comes.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +11,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO
 
-from massprops.errors import MeshFileError, MeshFormatError
+from massprops.errors import MeshFormatError
+from massprops.files import read_error, read_input
+
+__all__ = ["Source", "read_error", "text_content"]
 
 _BOM = b"\xef\xbb\xbf"
 
@@ -38,11 +45,7 @@ class Source:
         return data
 
     def _read_path(self, path: Path) -> bytes:
-        try:
-            with open(path, "rb") as f:
-                return f.read()
-        except OSError as exc:
-            raise read_error(self.name, exc) from exc
+        return read_input(path, name=self.name)
 
     def _read_stream(self) -> bytes:
         try:
@@ -52,17 +55,6 @@ class Source:
         # A text stream (sys.stdin rather than sys.stdin.buffer) already decoded the bytes;
         # encoding them back as UTF-8 is lossless.
         return data.encode("utf-8") if isinstance(data, str) else bytes(data)
-
-
-def read_error(name: str, exc: OSError) -> MeshFileError:
-    """The MeshFileError for an OSError met while opening or reading ``name``."""
-    if isinstance(exc, FileNotFoundError):
-        return MeshFileError(f"{name}: no such file; check the path")
-    if isinstance(exc, IsADirectoryError):
-        return MeshFileError(f"{name}: is a directory; expected a mesh file")
-    if isinstance(exc, PermissionError):
-        return MeshFileError(f"{name}: permission denied; make the file readable")
-    return MeshFileError(f"{name}: cannot read the file ({exc.strerror or exc})")
 
 
 def text_content(data: bytes, name: str, format_name: str) -> bytes:

@@ -106,9 +106,9 @@ def _read_binary_file(path: Path, name: str) -> Mesh | None:
     soup's face indices are written while a block is in cache.
     """
     try:
-        # Decided from the path, before any open: opening a FIFO blocks until a writer comes and
-        # reads its bytes once, so a pipe must be opened by the caller's one read alone (a second
-        # open after the writer finished would wait forever).
+        # Decided from the path, before any open: opening a FIFO blocks until a writer comes, so
+        # anything but a regular file is left to the caller's read, which refuses it unopened
+        # (massprops.files).
         if not stat.S_ISREG(os.stat(path).st_mode):
             return None
         with open(path, "rb") as f:

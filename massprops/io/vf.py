@@ -8,7 +8,6 @@ lines that follow it, and an error names the line where the two part ways.
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
@@ -16,8 +15,9 @@ from typing import BinaryIO
 import numpy as np
 
 from massprops.errors import MeshFileError, MeshFormatError
+from massprops.files import check_input_file
 from massprops.io import numtext, validate
-from massprops.io.source import Source, read_error, text_content
+from massprops.io.source import Source, text_content
 from massprops.io.textlines import TextLines, parse_numbers, strip_comments
 from massprops.mesh.value import Mesh, fan_triangulate
 
@@ -139,10 +139,8 @@ def read_vtx_fac(source: Source) -> Mesh:
             f"{source.name}: the vtx/fac format is two files and cannot be read from a stream; "
             f"pass the path of NAME.vtx or NAME.fac"
         )
-    try:  # the file named by the user first, so a typo is reported as such
-        os.stat(source.path)
-    except OSError as exc:
-        raise read_error(source.name, exc) from exc
+    # the file named by the user first, so a typo (or a pipe) is reported as such
+    check_input_file(source.path, name=source.name)
     vtx_path, fac_path = companion_paths(source.path, for_reading=True)
     vtx = LineCursor.open(_part_source(source, vtx_path), "VTX")
     vertices = vtx.vertices()

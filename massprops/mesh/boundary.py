@@ -4,15 +4,37 @@ how large the largest is against the surface. (Capping them is a repair:
 
 from __future__ import annotations
 
+import math
+from typing import NamedTuple
+
 import numpy as np
 
 from massprops.mesh.topology import Edges, connected_components
 
 
+class Holes(NamedTuple):
+    """``text``: the loops in words; ``largest``: the largest loop's vector area as a fraction
+    of the surface area (a lower bound of its cap's: equal for a flat loop)."""
+
+    text: str
+    largest: float
+
+
+def max_hole_for(fraction: float) -> float | None:
+    """The ``max_hole`` (a fraction of the surface, 2 significant digits) that accepts a cap of
+    ``fraction``: rounded up, with 0.1 % to spare for the cap's round-off; None beyond 1, the
+    largest the option takes."""
+    if not (math.isfinite(fraction) and fraction > 0):
+        return None
+    step = 10.0 ** (math.floor(math.log10(fraction * 1.001)) - 1)
+    value = float(f"{math.ceil(fraction * 1.001 / step) * step:.2g}")
+    return value if value <= 1 else None
+
+
 def describe_holes(edges: Edges, positions: np.ndarray, surface: float, *,
-                   open_only: bool = False) -> str | None:
-    """A few words on the holes of an open mesh for the "not closed" error: how many boundary
-    loops, and the largest's edges and vector area against the surface area (m²).
+                   open_only: bool = False) -> Holes | None:
+    """The holes of an open mesh for the "not closed" error: how many boundary loops, and the
+    largest's edges and vector area against the surface area (m²), in words and as a fraction.
 
     edges : the health check's `Edges` of the welded mesh; positions (u, 3):
     the position of each welded id; open_only : take the edges used once (the mesh was re-wound,
@@ -41,8 +63,9 @@ def describe_holes(edges: Edges, positions: np.ndarray, surface: float, *,
     size = np.sqrt(size) / 2
     big = int(np.argmax(size))
     many = "1 boundary loop" if n_loops == 1 else f"{n_loops} boundary loops"
-    return (f"{many}, the largest of {counts[big]} edges spanning {size[big]:.3g} m² "
-            f"({_percent(size[big], surface)} of the surface area)")
+    return Holes(f"{many}, the largest of {counts[big]} edges spanning {size[big]:.3g} m² "
+                 f"({_percent(size[big], surface)} of the surface area)",
+                 float(size[big] / surface) if surface > 0 else math.inf)
 
 
 def _percent(part: float, whole: float) -> str:

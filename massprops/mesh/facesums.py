@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from massprops.errors import ComputationError, MeshFormatError, setting_ref
+from massprops.errors import MeshFormatError, setting_ref
 from massprops.mesh.topology import is_soup
 from massprops.mesh.value import Mesh
 
@@ -94,9 +94,10 @@ def face_sums(mesh: Mesh, origin: np.ndarray, *, accurate: bool, area: bool) -> 
         if not np.isfinite(mesh.vertices).all():
             raise MeshFormatError(f"{mesh.name}: expected finite vertex coordinates, got NaN or "
                                   "infinity; fix or re-export the file")
-        raise ComputationError(f"{mesh.name}: the integral overflowed: expected coordinates of a "
-                               f"sane size, got products beyond 1e308; rescale the mesh "
-                               f"({setting_ref('unit')})")
+        # the input's scale (integral.check_coordinate_scale refuses it first, with its limit)
+        raise MeshFormatError(f"{mesh.name}: coordinates too large for float64 mass "
+                              "properties: the integral's products passed 1.8e308; rescale the "
+                              f"mesh ({setting_ref('unit')})")
     return FaceSums(t[0], t[1], t[2:5], t[5:8], t[8:11], t[11:14],
                     t[14:17] if area else np.zeros(3), ext[:, :3].min(axis=0),
                     ext[:, 3:].max(axis=0), m, accurate)

@@ -22,7 +22,7 @@ from massprops.mesh.geometry import area_vector_sums, exactly_flat, signed_volum
 from massprops.mesh.topology import Edges, connected_components, consistent_flips, edges, is_soup
 from massprops.mesh.value import Mesh
 from massprops.mesh.weld import near_groups, weld
-from massprops.tolerances import EPS, EPS32, NEAR_WELD_ULPS
+from massprops.tolerances import EPS, EPS32, MAX_HOLE_AREA_FRACTION, NEAR_WELD_ULPS
 
 if TYPE_CHECKING:  # imported where a repair needs it: most meshes never do
     from massprops.mesh.nesting import Plan
@@ -447,6 +447,24 @@ def check_mesh(mesh: Mesh) -> MeshHealth:
     return _health(mesh, a, volumes, warnings=warnings + _shape_notes(a))
 
 
+def _open_fixes(holes) -> str:
+    """What works on an open mesh: --fill-holes, with the --max-hole its largest loop needs
+    when that is above the default; --shell where no cap can be accepted (and for a part that
+    is open by design); or --allow-open."""
+    from massprops.mesh.boundary import max_hole_for  # the error path only
+
+    fill = f"use {setting_ref('fill_holes')}"
+    if holes is not None and holes.largest > MAX_HOLE_AREA_FRACTION:
+        needed = max_hole_for(holes.largest)
+        shell = (f"{setting_ref('shell')} THICKNESS for a thin-walled or open part, or "
+                 f"{setting_ref('allow_open')} to compute anyway")
+        if needed is None:
+            return f"no cap can close the largest loop: use {shell}"
+        return (f"{fill} with {setting_ref('max_hole')} {needed:g} to cap them (the largest "
+                f"is above the default limit {MAX_HOLE_AREA_FRACTION:g}), {shell}")
+    return f"{fill} to cap them, or {setting_ref('allow_open')} to compute anyway"
+
+
 def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
                  ) -> tuple[Mesh, MeshHealth]:
     """The mesh to integrate, and its health (topology as read; volumes and repairs as returned).
@@ -499,9 +517,8 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
             raise MeshTopologyError(f"{mesh.name}: mesh is not closed: "
                                     f"{n_open} boundary edges (total length "
                                     f"{_boundary_length(mesh, a):.6g} m"
-                                    f"{'' if holes is None else ' in ' + holes}); use "
-                                    f"{setting_ref('fill_holes')} to cap them, or "
-                                    f"{setting_ref('allow_open')} to compute anyway")
+                                    f"{'' if holes is None else ' in ' + holes.text}); "
+                                    f"{_open_fixes(holes)}")
         # Volumes of an open surface depend on the origin: take them about the box centre.
         centre = _box_centre(mesh, a)
         det6 = np.where(rewind, -1.0, 1.0) * signed_volumes6(

@@ -31,17 +31,26 @@ from typing import NamedTuple
 
 import numpy as np
 
-from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError
+from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError, setting_ref
 from massprops.inertia import parallel_axis_to_com, principal_axes
 from massprops.mesh.facesums import FaceSums, U, det_error, face_sums, gamma, reach_of, sum_depth
 from massprops.mesh.value import Mesh
 from massprops.tolerances import MIN_VOLUME_TO_ERROR
 
-__all__ = ["ErrorBars", "MassProperties", "Uncertainty", "UnitMoments", "mass_properties",
+__all__ = ["ErrorBars", "MassProperties", "Uncertainty", "UnitMoments",
+           "check_coordinate_scale", "coordinate_limit", "mass_properties",
            "properties_from_moments"]
 
 _FAST_DET_TARGET = 1e-14
 """Fast determinants are kept when their error bound is below this fraction of |Σ d|."""
+
+_TERM_BOUND = 2000.0
+"""The largest term of the integral for coordinates |x| <= X, in units of X⁵: a face's second
+moment d q (``facesums``) is at most 36√3 R⁵ ≈ 62.4 R⁵ for a reach |v_i - o_i| <= R, since
+|d| <= (√3 R)³ and |q_ij| <= 3R² + (3R)² = 12 R²; the origin o lies in the bounding box, so
+R <= 2X and d q <= 62.4 · 2⁵ X⁵ ≈ 1995 X⁵. Every partial sum over m faces is then at most
+2000 m X⁵, and the volume (X³), the first moments (X⁴), the parallel-axis terms and the error
+bars stay below it."""
 
 _RECENTRE_RATIO = 8.0
 """When Σ|d| exceeds this multiple of |Σd| about the box centre, the pass is repeated about the
@@ -131,15 +140,17 @@ def mass_properties(mesh: Mesh, *, density: float | None = None,
     density : kg/m³, default 1.0. mass : kg; if given, density = mass / volume. Not both.
     Raises UsageError (both given, or not positive and finite), MeshFormatError (non-finite
     coordinates, bad indices), DegenerateMeshError (no resolvable volume, or inside out),
-    ComputationError (coordinates so large that the products overflow).
+    MeshFormatError also for coordinates too large for float64 (`check_coordinate_scale`) and
+    a density or mass that takes the results beyond it.
     """
     check_density_mass(density, mass)
     _check_faces(mesh)
+    check_coordinate_scale(mesh)
     area = mesh.coordinate_dtype == np.float32 or mesh.vertex_displacement > 0
     origin, sums = _integrate(mesh, area)
     mo = _moments(sums, reach_of(sums), mesh.name)
 
-    props = properties_from_moments(origin, mo, density=density, mass=mass)
+    props = properties_from_moments(origin, mo, density=density, mass=mass, name=mesh.name)
     if not area:
         return props
     data_err = _input_uncertainty(mesh, origin + sums.lowest, origin + sums.highest, sums.area,
@@ -149,18 +160,25 @@ def mass_properties(mesh: Mesh, *, density: float | None = None,
 
 
 def properties_from_moments(origin: np.ndarray, mo: UnitMoments, *, density: float | None,
-                            mass: float | None) -> MassProperties:
+                            mass: float | None, name: str = "") -> MassProperties:
     """Mass properties from unit-density moments about ``origin`` (3,) m, with the rounding bars
     (``uncertainty.input`` None). Shared with solids that are not a closed mesh's interior (the
     thin wall of ``massprops.repair.shell``); ``density``/``mass`` as in `mass_properties`,
-    already checked."""
+    already checked. MeshFormatError naming ``name`` when the density or mass takes the mass or
+    the inertia beyond float64's range."""
     rho, rho_rel = (1.0 if density is None else float(density)), 0.0   # rho_rel: its error
-    if mass is not None:
-        rho, rho_rel = float(mass) / mo.volume, mo.volume_err / mo.volume + U
-    inertia = rho * mo.inertia
-    inertia_err = rho * mo.inertia_err + (rho_rel + 2 * U) * np.abs(inertia)
-    total = float(mass) if mass is not None else rho * mo.volume
-    total_err = 0.0 if mass is not None else rho * mo.volume_err + U * total
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is checked just below
+        if mass is not None:
+            rho, rho_rel = float(mass) / mo.volume, mo.volume_err / mo.volume + U
+        inertia = rho * mo.inertia
+        inertia_err = rho * mo.inertia_err + (rho_rel + 2 * U) * np.abs(inertia)
+        total = float(mass) if mass is not None else rho * mo.volume
+        total_err = 0.0 if mass is not None else rho * mo.volume_err + U * total
+    if not (np.isfinite(inertia_err).all() and math.isfinite(total_err) and math.isfinite(rho)):
+        raise MeshFormatError(
+            f"{name}: mass properties beyond float64's range (1.8e308): {mo.volume:.3g} m³ at "
+            f"{rho:.3g} kg/m³ gives an inertia of ~{_times(rho, np.abs(mo.inertia).max())} "
+            "kg·m²; give a smaller density or mass, or rescale the mesh")
     moments, axes = principal_axes(inertia)
     # Weyl: an eigenvalue moves by at most ||ΔJ||_2 <= ||bound||_2 (the 2-norm is monotone on
     # non-negative matrices); LAPACK's backward error on a 3x3 symmetric problem is a few
@@ -173,6 +191,15 @@ def properties_from_moments(origin: np.ndarray, mo: UnitMoments, *, density: flo
                            _frozen(inertia_err), _frozen(moments_err))
     return MassProperties(float(mo.volume), float(total), float(rho), _frozen(com),
                           _frozen(inertia), _frozen(moments), _frozen(axes), ErrorBars(rounding))
+
+
+def _times(a: float, b: float) -> str:
+    """a × b in words, also beyond float64 (``1e+300 * 1e+200`` -> ``1e+500``)."""
+    if a == 0 or b == 0 or not (math.isfinite(a) and math.isfinite(b)):
+        return f"{a * b:.3g}"
+    exponent = math.log10(abs(a)) + math.log10(abs(b))
+    whole = math.floor(exponent)
+    return f"{10 ** (exponent - whole):.3g}e+{whole}"
 
 
 def _integrate(mesh: Mesh, area: bool) -> tuple[np.ndarray, FaceSums]:
@@ -200,6 +227,35 @@ def check_density_mass(density: float | None, mass: float | None) -> None:
     for name, value in (("density", density), ("mass", mass)):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UsageError(f"{name} must be a positive finite number, got {value!r}")
+
+
+def coordinate_limit(faces: int) -> float:
+    """The largest |coordinate| (m) whose mass properties float64 holds for a mesh of ``faces``
+    triangles: the inertia integrates coordinates to the fifth power, so 2000 m X⁵ (see
+    ``_TERM_BOUND``) must stay below float64's largest number, 1.8e308: X <= (1.8e308 / (2000
+    m))^(1/5), 6e60 m for a cube's 12 triangles, 1.6e59 m for 10⁹."""
+    return float((np.finfo(np.float64).max / (_TERM_BOUND * max(int(faces), 1))) ** 0.2)
+
+
+def check_coordinate_scale(mesh: Mesh) -> None:
+    """MeshFormatError (exit 1) naming the file, its largest coordinate and the limit when the
+    coordinates are too large for float64 mass properties (`coordinate_limit`): checked before
+    any product is formed, so no overflow (nor numpy's warning of it) happens downstream."""
+    v = mesh.vertices
+    if v.size == 0:
+        return
+    with np.errstate(invalid="ignore"):
+        largest = max(float(v.max()), -float(v.min()))
+    limit = coordinate_limit(mesh.faces.shape[0])
+    if not largest > limit:  # NaN passes: the readers and the integral name it as such
+        return
+    i = int(np.argmax(np.abs(v).max(axis=1)))
+    unit = "" if mesh.coordinate_scale == 1.0 else " (after the unit conversion)"
+    raise MeshFormatError(
+        f"{mesh.name}: coordinates too large for float64 mass properties: vertex {i + 1} has "
+        f"|x| = {largest:.3g} m{unit}, but the inertia integrates coordinates to the fifth "
+        f"power, finite only for |x| below {limit:.2g} m ({mesh.faces.shape[0]} triangles); "
+        f"rescale the mesh or give the unit its coordinates are in ({setting_ref('unit')})")
 
 
 def _check_faces(mesh: Mesh) -> None:

@@ -34,6 +34,7 @@ import numpy as np
 
 from massprops.errors import MeshTopologyError, setting_ref
 from massprops.mesh import Mesh
+from massprops.mesh.boundary import max_hole_for
 from massprops.mesh.pieces import Welded
 from massprops.mesh.topology import consistent_flips
 from massprops.repair.bars import Regions
@@ -128,11 +129,13 @@ def fill_holes(mesh: Mesh, *, max_fraction: float | None = None,
             area = float(_areas(points, tri).sum())
             problem = None
             if area > limit * surface:
+                needed = max_hole_for(area / surface)
+                raise_it = ("no limit accepts it" if needed is None else
+                            f"raise it with {setting_ref('max_hole')} {needed:g}")
                 problem = (f"{where} ({loop.ids.size} edges, length {length:.6g} m) would need a "
                            f"cap of {area:.6g} m², {_percent(area, surface)} of the surface area: "
-                           f"too large to be a hole (limit {limit:g} of the surface; raise it "
-                           f"with {setting_ref('max_hole')}, or use {setting_ref('shell')} for a "
-                           f"thin-walled or open part)")
+                           f"too large to be a hole (limit {limit:g} of the surface; {raise_it}, "
+                           f"or use {setting_ref('shell')} for a thin-walled or open part)")
         if problem is not None:
             if not allow_open:
                 raise MeshTopologyError(f"{mesh.name}: {problem}")

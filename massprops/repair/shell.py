@@ -119,7 +119,7 @@ def shell_properties(mesh: Mesh, thickness: float, *, density: float | None = No
     normals, doubled = unit_normals(w.positions[w.tri])  # every face's, once
     met = joins(w, normals, doubled, origin, thickness)
     mo = _unit_moments(faces, met, thickness)
-    props = properties_from_moments(origin, mo, density=density, mass=mass)
+    props = properties_from_moments(origin, mo, density=density, mass=mass, name=mesh.name)
     if mesh.coordinate_dtype == np.float32:
         props = _with_input_bar(props, mesh, faces, thickness, mass is not None)
     bar = moment_bounds(met.regions.sums(w.positions, props.center_of_mass), props,

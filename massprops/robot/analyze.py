@@ -27,6 +27,7 @@ from massprops.robot.formats.xmltree import parse_xml, parse_xml_bytes
 from massprops.robot.inertials.combine import LinkMass, MeshCache, combine, integrate_geometry
 from massprops.robot.inertials.compare import Comparison, compare, validity_problems
 from massprops.robot.model import Link, RobotModel
+from massprops.tolerances import WRITE_KEEP_RTOL
 
 __all__ = ["LinkReport", "ModelReport", "analyze_model", "load_model", "FORMATS_BY_ROOT"]
 
@@ -122,17 +123,28 @@ class ModelReport:
                 f"{self.name}: {len(bad)} link(s) differ from their geometry by more than "
                 f"{rtol:g}: {'; '.join(bad)}; fix the inertials (massprops model --write OUT)")
 
-    def write(self, out: str | os.PathLike, *, force: bool = False) -> int:
-        """Write the description with every computed link's inertial replaced or added;
-        returns how many were written. Atomic, never over the input."""
+    def to_rewrite(self, rtol: float | None = None) -> list[LinkReport]:
+        """The computed links whose inertial is off: none stated, or not physically valid, or
+        differing from the computed one by more than ``rtol`` (default WRITE_KEEP_RTOL:
+        round-off); the others are kept as written."""
+        keep = WRITE_KEEP_RTOL if rtol is None else rtol
+        return [r for r in self.links if r.computed is not None and (
+            r.link.stated is None or r.stated_problems() or r.comparison is None
+            or r.comparison.worst > keep)]
+
+    def write(self, out: str | os.PathLike, *, force: bool = False,
+              rtol: float | None = None) -> tuple[str, ...]:
+        """Write the description with the inertial of every link that is off (`to_rewrite`)
+        replaced, or added where it has none; every other byte as read. Returns the names of
+        the links rewritten. Atomic, never over the input."""
         # deferred: a description loads only its own format's parser
         from massprops.robot.write.writeback import edited_bytes, write_description
 
-        edits = [(r.link.node, r.link.inertial_node, r.computed) for r in self.links
-                 if r.computed is not None]
+        chosen = self.to_rewrite(rtol)
+        edits = [(r.link.node, r.link.inertial_node, r.computed) for r in chosen]
         own = (self.model.path, Path(f"{self.model.path}{EXPANDED}"))
-        elsewhere = [r.name for r in self.links if r.computed is not None
-                     and r.link.node.file is not None and r.link.node.file not in own]
+        elsewhere = [r.name for r in chosen
+                     if r.link.node.file is not None and r.link.node.file not in own]
         if elsewhere:
             raise UsageError(f"{self.name}: {setting_ref('write')} edits this file only, but "
                              f"link(s) {', '.join(elsewhere[:3])} come from an included or "
@@ -140,7 +152,7 @@ class ModelReport:
                              "compiled model (mujoco.mj_saveLastXML) first")
         data = edited_bytes(self.model.data, self.model.format, edits)
         write_description(data, out, source=self.model.path, force=force)
-        return len(edits)
+        return tuple(r.name for r in chosen)
 
 
 def load_model(path: str | os.PathLike, *, source: str = "auto",

@@ -54,23 +54,25 @@ class Description:
 
 
 def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | None = None,
-             package_paths=()) -> Description:
+             package_paths=(), xacro_args=None) -> Description:
     """The bodies and joints of the description at ``path`` (see the module doc).
 
     inertials : "stated" (the file's inertials; an MJCF body without one gets MuJoCo's sum over
         its geoms) or "computed" (from the geometry, as ``massprops model`` computes them).
-    base : "fixed", "floating" or None (the description's own). Raises RobotModelError.
+    base : "fixed", "floating" or None (the description's own). package_paths, xacro_args : as
+        for ``massprops model`` (folders for package:// and model://; NAME -> VALUE of a
+        .xacro file's $(arg NAME)). Raises RobotModelError.
     """
     # deferred: the robot analysis (parsers, mesh integrals) loads only for a description
     from massprops.robot.analyze import analyze_model, load_model
 
     path = Path(path)
     masses, warnings = {}, []
-    model = load_model(path, package_paths=package_paths)
+    model = load_model(path, package_paths=package_paths, xacro_args=xacro_args)
     auto = {link.name for link in model.links if link.stated is None and link.geometries
             and all(g.density is not None for g in link.geometries)}  # SDF <inertial auto>
     if inertials == "computed" or model.format == "mjcf" or auto:
-        report = analyze_model(path, package_paths=package_paths)
+        report = analyze_model(path, package_paths=package_paths, xacro_args=xacro_args)
         model = report.model
         if inertials == "computed" and report.errors:
             raise RobotModelError(report.errors[0])

@@ -2,7 +2,9 @@
 
 The scene (contract, "simulate a robot description"):
 
-    model: arm.urdf            # URDF, SDF or MJCF; relative to the scene file's folder
+    model: arm.urdf            # URDF, SDF, MJCF or .xacro; relative to the scene file's folder
+    package_path: [../ros]     # folders for package:// and model:// (optional; as --package-path)
+    xacro_args: [arm:=left]    # a .xacro's $(arg NAME) values (optional; as --xacro-arg)
     inertials: stated          # or computed
     base: fixed                # or floating; absent: the description's own
     initial: {positions: {shoulder: 0.3}, rates: {elbow: 1.0}}
@@ -20,12 +22,13 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from massprops.dynamics.model import OutputSettings, TimeSettings
-from massprops.dynamics.scene import _output
+from massprops.dynamics.scene import _output, _with_place, scene_text
 from massprops.dynamics.systems.description import (
     BASES,
     INERTIALS,
@@ -37,19 +40,33 @@ from massprops.dynamics.systems.model import SystemInitial, SystemScene
 from massprops.dynamics.systems.scene import (
     _forces,
     _initial,
+    is_system_text,
     parse_system,
     system_time,
     with_time,
 )
-from massprops.dynamics.yamlnodes import Field, compose, read_choice, read_mapping, read_string
-from massprops.errors import SceneError
+from massprops.dynamics.yamlnodes import (
+    Field,
+    compose,
+    read_choice,
+    read_mapping,
+    read_string,
+    read_strings,
+)
+from massprops.errors import InputError, SceneError, UsageError, setting_ref
+from massprops.files import file_problem
+from massprops.robot.formats.xacro_run import parse_xacro_arg
 
-__all__ = ["DESCRIPTION_SUFFIXES", "description_scene", "is_description", "load_any_system",
-           "parse_model_scene"]
+__all__ = ["DESCRIPTION_SUFFIXES", "check_description_settings", "description_scene",
+           "is_description", "is_system_file", "load_any_system", "parse_model_scene"]
 
 DESCRIPTION_SUFFIXES = (".urdf", ".sdf", ".xml", ".xacro")
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
-_KEYS = ("model", "inertials", "base", "initial", "forces", "time", "output")
+_KEYS = ("model", "package_path", "xacro_args", "inertials", "base", "initial", "forces", "time",
+         "output")
+_SCENE_KEYS = {"package_path": "the scene key package_path:",
+               "xacro_arg": "an entry of the scene key xacro_args:"}
+"""How a `model:` scene says the settings a description's messages name (`setting_ref`)."""
 
 
 def is_description(path: str | os.PathLike) -> bool:
@@ -57,17 +74,45 @@ def is_description(path: str | os.PathLike) -> bool:
     return Path(path).suffix.lower() in DESCRIPTION_SUFFIXES
 
 
-def load_any_system(path: str | os.PathLike, duration: float | None = None) -> SystemScene:
-    """A system scene file (``bodies:`` or ``model:``) or a robot description
-    (`description_scene`), with its duration set to ``duration`` s where given (a
-    description's default: 1 s). SceneError / RobotModelError, one line."""
+def is_system_file(path: str | os.PathLike) -> bool:
+    """True for a file the systems package runs: a robot description (by its name) or a scene
+    with ``bodies:`` or ``model:``. False too when the file cannot be read: the one-body reader
+    then says why, in one line."""
     if is_description(path):
-        return description_scene(path, duration=1.0 if duration is None else duration)
-    path = Path(path)
+        return True
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read the scene file: {exc.strerror}") from exc
+        return is_system_text(scene_text(path))
+    except SceneError:
+        return False
+
+
+def check_description_settings(path: str | os.PathLike, package_paths: Sequence = (),
+                               xacro_args: Mapping | None = None) -> None:
+    """UsageError unless ``path`` is a robot description or neither setting is given: a scene
+    file names its own (a `model:` scene's keys package_path and xacro_args)."""
+    given = [name for name, value in (("package_path", package_paths),
+                                      ("xacro_arg", xacro_args)) if value]
+    if given and not is_description(path):
+        raise UsageError(f"{path}: {' and '.join(setting_ref(n) for n in given)} "
+                         f"appl{'y' if len(given) > 1 else 'ies'} to a robot description given "
+                         "directly; a scene with model: names its own (the keys package_path "
+                         "and xacro_args)")
+
+
+def load_any_system(path: str | os.PathLike, duration: float | None = None, *,
+                    package_paths: Sequence[str | os.PathLike] = (),
+                    xacro_args: Mapping[str, str] | None = None) -> SystemScene:
+    """A system scene file (``bodies:`` or ``model:``) or a robot description
+    (`description_scene`, with ``package_paths`` and ``xacro_args``), with its duration set to
+    ``duration`` s where given (a description's default: 1 s). SceneError / RobotModelError,
+    one line; UsageError for package_paths or xacro_args with a scene file (a `model:` scene
+    names its own: package_path, xacro_args)."""
+    if is_description(path):
+        return description_scene(path, duration=1.0 if duration is None else duration,
+                                 package_paths=package_paths, xacro_args=xacro_args)
+    check_description_settings(path, package_paths, xacro_args)
+    path = Path(path)
+    text = scene_text(path)
     if any(line.startswith("model:") for line in text.splitlines()):
         scene = parse_model_scene(text, source=os.fspath(path), base_dir=path.parent)
     else:
@@ -81,13 +126,21 @@ def parse_model_scene(text: str, *, source: str, base_dir: Path) -> SystemScene:
     fields = read_mapping(Field(root, "", source), _KEYS,
                           {"model": "model: arm.urdf", "time": "time: {duration: 2.0}"})
     file = base_dir / read_string(fields["model"], "a URDF, SDF or MJCF file name")
-    if not file.is_file():
-        raise fields["model"].error(f"no such file {file} (relative paths start at the scene "
+    problem = file_problem(file)
+    if problem is not None:
+        raise fields["model"].error(f"{file} {problem} (relative paths start at the scene "
                                     "file's folder)")
     inertials = (read_choice(fields["inertials"], INERTIALS, "inertials")
                  if "inertials" in fields else "stated")
     base = read_choice(fields["base"], BASES, "base") if "base" in fields else None
-    desc = describe(file, inertials=inertials, base=base)
+    folders = ([base_dir / p for _, p in read_strings(fields["package_path"], "a folder")]
+               if "package_path" in fields else [])
+    arguments = _xacro_args(fields.get("xacro_args"))
+    try:
+        desc = describe(file, inertials=inertials, base=base, package_paths=folders,
+                        xacro_args=arguments)
+    except InputError as exc:  # the description's own line, its fix said as scene keys
+        raise _with_place(exc, fields["model"], lambda n: _SCENE_KEYS.get(n, n)) from exc
     index = {b.name: i for i, b in enumerate(desc.bodies)}
     places: dict[str, str] = {}
     gravity, forces, springs, drags = _forces(fields.get("forces"), index)
@@ -97,11 +150,26 @@ def parse_model_scene(text: str, *, source: str, base_dir: Path) -> SystemScene:
     return _scene(desc, gravity, forces, springs, initial, time, output, source, places, drags)
 
 
-def description_scene(path: str | os.PathLike, *, duration: float = 1.0) -> SystemScene:
+def _xacro_args(field: Field | None) -> dict[str, str]:
+    """``xacro_args``: NAME:=VALUE strings, one or a list, as ``--xacro-arg`` takes them."""
+    out: dict[str, str] = {}
+    for item, text in ([] if field is None else read_strings(field, "NAME:=VALUE")):
+        try:
+            name, value = parse_xacro_arg(text)
+        except ValueError as exc:
+            raise item.error(str(exc)) from exc
+        out[name] = value
+    return out
+
+
+def description_scene(path: str | os.PathLike, *, duration: float = 1.0,
+                      package_paths: Sequence[str | os.PathLike] = (),
+                      xacro_args: Mapping[str, str] | None = None) -> SystemScene:
     """``massprops simulate ROBOT``: the description with stated inertials, its own base, the
     standard gravity (or MJCF's ``<option gravity>``), from the zero pose at rest, for
-    ``duration`` s (0: the start pose only)."""
-    desc = describe(path)
+    ``duration`` s (0: the start pose only); ``package_paths`` and ``xacro_args`` as for
+    ``massprops model``."""
+    desc = describe(path, package_paths=package_paths, xacro_args=xacro_args)
     gravity = np.array(STANDARD_GRAVITY) if desc.gravity is None else desc.gravity
     return _scene(desc, gravity, (), (), SystemInitial(), TimeSettings(float(duration)),
                   OutputSettings(), os.fspath(path), {})

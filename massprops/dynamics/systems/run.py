@@ -368,15 +368,15 @@ def trajectory_table(result: SystemResult) -> tuple[list[str], np.ndarray]:
 def write_system_trajectory(result: SystemResult, path: str | Path, *, force: bool = False,
                             protect=()) -> None:
     """CSV (header, full precision) or NPZ (``columns`` and ``table``), atomically."""
-    from massprops.io.atomic import atomic_write_bytes  # deferred: only when a file is written
+    # deferred: only when a file is written
+    from massprops.dynamics.trajectory import trajectory_output
+    from massprops.io.atomic import atomic_write_bytes, check_output
 
-    path = Path(path)
+    path = check_output(path, trajectory_output(), force=force, protect=protect)
     names, table = trajectory_table(result)
     buf = io.BytesIO()
     if path.suffix.lower() == ".csv":
         np.savetxt(buf, table, delimiter=",", fmt="%.17g", header=",".join(names), comments="")
-    elif path.suffix.lower() == ".npz":
-        np.savez(buf, columns=np.array(names), table=table)
     else:
-        raise UsageError(f"trajectory file must end in .csv or .npz, got {path.suffix!r}")
+        np.savez(buf, columns=np.array(names), table=table)
     atomic_write_bytes(path, buf.getvalue(), force=force, protect=protect)

@@ -27,6 +27,7 @@ from massprops.dynamics.scene import (
     _quaternion,
     _time,
     _window,
+    scene_text,
 )
 from massprops.dynamics.systems.model import (
     ONE_AXIS,
@@ -80,11 +81,7 @@ def is_system_text(text: str) -> bool:
 def load_system(path: str | os.PathLike[str]) -> SystemScene:
     """Read and validate the system scene at ``path``; SceneError (one line) on bad input."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read the scene file: {exc.strerror}") from exc
-    return parse_system(text, source=os.fspath(path), base_dir=path.parent)
+    return parse_system(scene_text(path), source=os.fspath(path), base_dir=path.parent)
 
 
 def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:

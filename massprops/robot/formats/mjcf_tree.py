@@ -16,6 +16,7 @@ eulerseq), i.e. each copy is the previous one moved by T; every name inside gets
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -45,9 +46,8 @@ def expand_includes(root: Node, main: Path, _chain: tuple[Path, ...] = ()) -> No
             raise RobotModelError(f"{where}:{node.line}: <include> needs file=\"...\"")
         target = _locate(file, main, where)
         if target is None:
-            raise RobotModelError(
-                f"{where}:{node.line}: <include file={file!r}>: no such file in "
-                f"{main.parent} (the main model's folder) nor in {where.parent}; fix the path")
+            raise RobotModelError(f"{where}:{node.line}: <include file={file!r}>: "
+                                  f"{_not_found(file, main, where)}; fix the path")
         resolved = target.resolve()
         if resolved in chain or len(chain) > _MAX_DEPTH:
             raise RobotModelError(f"{where}:{node.line}: <include file={file!r}> includes "
@@ -61,12 +61,25 @@ def expand_includes(root: Node, main: Path, _chain: tuple[Path, ...] = ()) -> No
     return root
 
 
+def _not_found(file: str, main: Path, including: Path) -> str:
+    """Where a missing include was looked for: the folders, absolute, each once."""
+    if Path(file).is_absolute():
+        return "no such file"
+    first, second = (os.path.abspath(p.parent) for p in (main, including))
+    if first == second:
+        return f"no such file in {first} (the main model's folder)"
+    return (f"no such file in {first} (the main model's folder) nor in {second} (the "
+            "including file's folder)")
+
+
 def _locate(file: str, main: Path, including: Path) -> Path | None:
+    """Where ``file`` is: absolute, or in the main model's folder, else the including file's;
+    None if nowhere (something there that is not a regular file: parse_xml refuses it)."""
     p = Path(file)
     if p.is_absolute():
-        return p if p.is_file() else None
+        return p if p.exists() else None
     for folder in (main.parent, including.parent):
-        if (folder / p).is_file():
+        if (folder / p).exists():
             return folder / p
     return None
 

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from massprops.errors import MeshFileError
+from massprops.files import read_input
+
 __all__ = ["read_msh"]
 
 
@@ -15,9 +18,9 @@ def read_msh(entry: dict) -> None:
     problem."""
     path = entry["path"]
     try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        entry["problem"] = f"{path}: cannot read the file ({exc.strerror or exc})"
+        raw = read_input(path, what="a MuJoCo .msh mesh")
+    except MeshFileError as exc:
+        entry["problem"] = exc.template
         return
     if len(raw) < 16:
         entry["problem"] = f"{path}: too short for MuJoCo's .msh format"

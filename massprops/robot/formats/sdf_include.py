@@ -59,7 +59,7 @@ def expand_sdf_includes(root: Node, path: Path, package_paths: Sequence[Path],
 
 
 def _model_file(target: Path, where: Path, node: Node, uri: str) -> Path:
-    if target.is_file():
+    if target.exists() and not target.is_dir():  # a file (parse_xml refuses a special one)
         return target
     if not target.is_dir():
         raise RobotModelError(f"{where}:{node.line}: <include> {uri!r}: {target} does not "

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from massprops.errors import MassPropsError, RobotModelError, setting_ref
 
-__all__ = ["EXPANDED", "expand_xacro", "has_xacro", "is_xacro"]
+__all__ = ["EXPANDED", "expand_xacro", "has_xacro", "is_xacro", "parse_xacro_arg"]
 
 EXPANDED = " (expanded by xacro)"
 """Appended to the file name in messages about the expanded text (its line numbers)."""
@@ -56,10 +56,12 @@ def expand_xacro(path: Path, args: Mapping[str, str] | None = None,
         try:
             doc = xacro.process_file(str(path), mappings=dict(args or {}))
         except Exception as exc:  # xacro raises XacroException, its own and the XML parser's
+            ours = _ours(exc)
+            if ours is not None:  # our $(find) refused: its own line, its settings kept
+                raise ours from exc
             text = " ".join(str(exc).split()) or type(exc).__name__
-            raise RobotModelError(f"{path}: xacro failed: {text}; fix the file or give the "
-                                  f"missing argument with {setting_ref('xacro_arg')} "
-                                  "NAME:=VALUE") from exc
+            raise RobotModelError(f"{path}: xacro failed: {text}; {_what_to_do(text, path)}"
+                                  ) from exc
     if notes is not None:
         for line in _ANSI.sub("", printed.getvalue()).splitlines():
             line = line.strip()
@@ -70,6 +72,48 @@ def expand_xacro(path: Path, args: Mapping[str, str] | None = None,
 
 
 _ANSI = re.compile(r"\x1b\[[0-9;]*m")  # xacro colours its warnings
+_NO_ARG = re.compile(r"Undefined substitution argument (\S+)")  # $(arg NAME) without a value
+_NO_NAME = re.compile(r"name '(\w+)' is not defined")  # ${NAME}: Python's NameError, said
+
+
+def _ours(exc: BaseException) -> MassPropsError | None:
+    """The MassPropsError xacro wrapped while running our ``$(find)`` (its XacroException
+    keeps it as ``exc`` and as the context), if any."""
+    seen: set[int] = set()
+    stack: list[BaseException | None] = [exc]
+    while stack:
+        e = stack.pop()
+        if e is None or id(e) in seen:
+            continue
+        seen.add(id(e))
+        if isinstance(e, MassPropsError):
+            return e
+        stack += [getattr(e, "exc", None), e.__cause__, e.__context__]
+    return None
+
+
+def _what_to_do(text: str, path: Path) -> str:
+    """The fix for xacro's message ``text``: an argument ``$(arg NAME)`` takes its value from
+    the caller (`xacro_arg`); a ``${name}`` is a property, which only the file (or one it
+    includes) can define."""
+    arg = _NO_ARG.search(text)
+    if arg:
+        return f"give its value with {setting_ref('xacro_arg')} {arg[1]}:=VALUE"
+    name = _NO_NAME.search(text)
+    if name:
+        return (f"the property {name[1]!r} is not defined in {path.name} nor in the files it "
+                f"includes: define it there (<xacro:property name=\"{name[1]}\" value=\"...\"/>)"
+                " or fix the expression")
+    return "fix the file"
+
+
+def parse_xacro_arg(text: str) -> tuple[str, str]:
+    """(NAME, VALUE) of one ``NAME:=VALUE`` argument, as ``xacro FILE NAME:=VALUE`` takes it;
+    ValueError saying what was expected."""
+    name, sep, value = text.partition(":=")
+    if not sep or not name.strip():
+        raise ValueError(f"expected NAME:=VALUE, got {text!r}")
+    return name.strip(), value
 
 
 @contextlib.contextmanager

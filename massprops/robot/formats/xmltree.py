@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
 
-from massprops.errors import MeshFileError, RobotModelError
+from massprops.errors import RobotModelError
+from massprops.files import read_input
 
 __all__ = ["Node", "parse_xml", "parse_xml_bytes"]
 
@@ -72,14 +73,7 @@ def parse_xml(path: str | os.PathLike) -> tuple[Node, bytes]:
     column) if it is not well-formed XML.
     """
     p = Path(path)
-    try:
-        data = p.read_bytes()
-    except IsADirectoryError as exc:
-        raise MeshFileError(f"{p}: is a directory; expected a robot description file") from exc
-    except FileNotFoundError as exc:
-        raise MeshFileError(f"{p}: no such file; check the path") from exc
-    except OSError as exc:
-        raise MeshFileError(f"{p}: cannot read the file ({exc.strerror or exc})") from exc
+    data = read_input(p, what="a robot description file")
     return _Builder(data, str(p)).run(), data
 
 

@@ -13,11 +13,11 @@ import os
 from pathlib import Path
 
 from massprops.errors import RobotModelError
-from massprops.io.atomic import atomic_write_bytes
+from massprops.io.atomic import OutputKind, atomic_write_bytes
 from massprops.robot.formats.xmltree import Node
 from massprops.robot.write.elements import WRITERS
 
-__all__ = ["edited_bytes", "write_description"]
+__all__ = ["description_output", "edited_bytes", "write_description"]
 
 
 def edited_bytes(data: bytes, fmt: str, edits: list[tuple[Node, Node | None, object]]) -> bytes:
@@ -52,11 +52,23 @@ def edited_bytes(data: bytes, fmt: str, edits: list[tuple[Node, Node | None, obj
     return bytes(out)
 
 
+_WRITES_AS = {".xacro": ".urdf"}
+"""A description whose edited file has another extension than its own: xacro's expansion."""
+
+
+def description_output(source: str | os.PathLike) -> OutputKind:
+    """The output rule's `OutputKind` for ``--write`` of the description at ``source``: its own
+    format, so its own extension (a .xacro file writes its expansion, a .urdf)."""
+    own = Path(os.fspath(source)).suffix.lower()
+    return OutputKind("the edited description", (_WRITES_AS.get(own, own),), "write")
+
+
 def write_description(data: bytes, out: str | os.PathLike, *, source: Path,
                       force: bool = False) -> None:
-    """Write ``data`` to ``out`` atomically; never over ``source`` (the description read), nor
-    over an existing file without ``force``."""
-    atomic_write_bytes(Path(out), data, force=force, protect=[source])
+    """Write ``data`` to ``out`` atomically under the output rule (`description_output`): never
+    over ``source`` (the description read), nor over an existing file without ``force``."""
+    atomic_write_bytes(Path(out), data, force=force, protect=[source],
+                       kind=description_output(source))
 
 
 def _indent_of(data: bytes, at: int) -> str | None:
