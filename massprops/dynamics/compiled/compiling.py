@@ -34,10 +34,11 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 COMPILE_SECONDS = {"rk4": 2.0, "dop853": 3.0, "implicit": 8.0, "midpoint": 5.0,
-                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0, "systems": 130.0}
+                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0, "systems": 70.0}
 """About how long (s, one idle core) compiling each method's kernels takes from an empty cache,
-from benchmarks/bench_first_run.py; only for the notice's estimate. The three splitting methods
-share one kernel."""
+from benchmarks/bench_first_run.py (the systems' kernel: 66 s of CPU, 77 s of wall time on a
+loaded machine, 2026-12-02); only for the notice's estimate and for sharing the work between two
+processes. The three splitting methods share one kernel."""
 
 SYSTEMS = "systems"
 """The name of the systems' one kernel (`systems_kernel.run_segment`: every method a system
