@@ -8,7 +8,7 @@ reader. Subclasses also inherit the builtin a Python caller would expect (``OSEr
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 _SETTING = re.compile("\x1f([a-z_.]+)\x1f")
 
@@ -150,6 +150,20 @@ def exit_code(exc: BaseException) -> int:
     return 3  # anything else is a failure of the computation itself (a bug)
 
 
+def chain(exc: BaseException, *links: str) -> Iterator[BaseException]:
+    """``exc`` and every exception behind it (``__cause__``, ``__context__`` and the attributes
+    named in ``links``, such as a wrapper's ``exc``), each once."""
+    seen: set[int] = set()
+    stack: list[BaseException | None] = [exc]
+    while stack:
+        e = stack.pop()
+        if not isinstance(e, BaseException) or id(e) in seen:
+            continue
+        seen.add(id(e))
+        yield e
+        stack += [*(getattr(e, link, None) for link in links), e.__cause__, e.__context__]
+
+
 def format_traceback(exc: BaseException) -> str:
     """``exc``'s traceback as Python formats it (for ``--debug``), each massprops error's message
     in it as its template: the settings it names kept as `setting_ref` references, for whoever
@@ -157,16 +171,9 @@ def format_traceback(exc: BaseException) -> str:
     import traceback  # deferred: only a failure pays for it
 
     text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
-    seen: set[int] = set()
-    stack: list[BaseException | None] = [exc]
-    while stack:
-        e = stack.pop()
-        if e is None or id(e) in seen:
-            continue
-        seen.add(id(e))
+    for e in chain(exc):
         if isinstance(e, MassPropsError) and e.settings:
             text = text.replace(str(e), e.template)
-        stack += [e.__cause__, e.__context__]
     return text
 
 

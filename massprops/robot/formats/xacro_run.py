@@ -15,7 +15,7 @@ import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from massprops.errors import MassPropsError, RobotModelError, setting_ref
+from massprops.errors import MassPropsError, RobotModelError, chain, setting_ref
 
 __all__ = ["EXPANDED", "expand_xacro", "has_xacro", "is_xacro", "parse_xacro_arg"]
 
@@ -79,17 +79,7 @@ _NO_NAME = re.compile(r"name '(\w+)' is not defined")  # ${NAME}: Python's NameE
 def _ours(exc: BaseException) -> MassPropsError | None:
     """The MassPropsError xacro wrapped while running our ``$(find)`` (its XacroException
     keeps it as ``exc`` and as the context), if any."""
-    seen: set[int] = set()
-    stack: list[BaseException | None] = [exc]
-    while stack:
-        e = stack.pop()
-        if e is None or id(e) in seen:
-            continue
-        seen.add(id(e))
-        if isinstance(e, MassPropsError):
-            return e
-        stack += [getattr(e, "exc", None), e.__cause__, e.__context__]
-    return None
+    return next((e for e in chain(exc, "exc") if isinstance(e, MassPropsError)), None)
 
 
 def _what_to_do(text: str, path: Path) -> str:
