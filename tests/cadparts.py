@@ -224,3 +224,18 @@ def write_named(parts, path, fmt: str) -> None:
         assert writer.Write(str(path))
     finally:
         Interface_Static.SetIVal_s("write.iges.brep.mode", 0)
+
+
+def write_iges_faces(shape, path, unit: str = "MM") -> None:
+    """One shape to IGES in the writer's default mode (brep mode 0: its faces as trimmed
+    surfaces, no shell or solid around them, as many CAD tools write); coordinates taken as
+    ``unit`` (no scaling)."""
+    from OCP.IGESControl import IGESControl_Writer
+
+    writer = IGESControl_Writer(unit, 0)
+    section = writer.Model().GlobalSection()
+    section.SetCascadeUnit(section.UnitValue())   # the shape's numbers are in ``unit`` already
+    writer.Model().SetGlobalSection(section)
+    writer.AddShape(shape)
+    writer.ComputeModel()
+    assert writer.Write(str(path))

@@ -9,6 +9,7 @@ names, assembly paths, placements and units), ``labels`` (names, colours, materi
 (the face census and an area bound), ``integrate`` (one solid about a local origin, with its
 error bars), ``freeform`` and ``nurbs`` (free-form faces: our Gauss rule per knot span and
 OpenCASCADE's adaptive one), ``shell`` (``--shell T``: faces as a wall's mid-surface),
+``sew`` (loose faces, as IGES face mode writes them, sewn into closed solids),
 ``inspect`` (per-solid results, densities by name, the total), ``write`` (align: exact geometry
 moved into the principal frame, or tessellated), ``tessellate`` (a shape as triangles).
 """

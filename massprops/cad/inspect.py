@@ -153,9 +153,13 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
             shells.append((bar, record))
             continue
         if not solid.closed and not allow_open:
+            sewn = "" if solid.sewn is None else (
+                f" (its loose faces do not close when sewn within the file's tolerance, "
+                f"{solid.sewn:.3g} {cad.unit})")
             raise MeshTopologyError(
-                f"{cad.name}: {solid.path} is an open shell, not a closed solid: its volume "
-                f"is undefined; close it in the CAD tool, or pass {setting_ref('allow_open')}")
+                f"{cad.name}: {solid.path} is an open shell, not a closed solid{sewn}: its "
+                f"volume is undefined; close it in the CAD tool, or pass "
+                f"{setting_ref('allow_open')}")
         integrals.append(integrate_solid(solid.shape, cad.scale, f"{cad.name}: {solid.path}",
                                          only_closed=solid.closed))
     densities, warnings = _densities(cad, density_map or [], density)
@@ -174,6 +178,11 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
         notes = [] if solid.closed or shells else [
             "open shell integrated as if closed (--allow-open): the volume depends on where "
             "the origin is and is not a property of the part"]
+        if solid.closed and solid.sewn is not None:
+            notes.append(f"sewn from {solid.faces} loose faces (the file has no solid around "
+                         f"them) within the file's tolerance, {solid.sewn:.3g} {cad.unit}, "
+                         "into a closed solid oriented outward; the gaps closed are in "
+                         "uncertainty.input")
         if integral.valid is False:
             notes.append("not a valid shape (OpenCASCADE's BRepCheck): the integral and its "
                          "bars describe the surfaces as stored, which may not bound the "
@@ -182,7 +191,9 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
         placement[:3, 3] *= cad.scale
         results.append(SolidResult(solid, placement, integral, props,
                                    _integration(integral, props),
-                                   _input(integral, props, cad), tuple(notes), repairs))
+                                   _input(integral, props, cad,
+                                          solid.sewn if solid.closed else None), tuple(notes),
+                                   repairs))
     total = _total(results) if len(results) > 1 else None
     return CadInspection(cad, tuple(results), total, tuple(warnings))
 
@@ -214,10 +225,12 @@ def _integration(integral: SolidIntegral, props: MassProperties) -> Uncertainty 
     return Uncertainty(dv, rho * dv, dc, dj, np.full(3, np.linalg.norm(dj, 2)))
 
 
-def _input(integral: SolidIntegral, props: MassProperties, cad: CadFile) -> Uncertainty | None:
+def _input(integral: SolidIntegral, props: MassProperties, cad: CadFile,
+           sewn: float | None = None) -> Uncertainty | None:
     """First order: every surface point may lie anywhere within the modelling tolerance τ
-    (plus 2 ulps of the largest coordinate, plus half the last printed digit for IGES), so ∫g dV
-    moves by at most max|g| τ A
+    (plus 2 ulps of the largest coordinate, plus half the last printed digit for IGES, plus
+    the tolerance ``sewn`` (file unit) its loose faces were sewn at: a gap that wide, closed
+    anywhere, moves the boundary that far), so ∫g dV moves by at most max|g| τ A
     (the mesh ``input`` bar's argument with η = τ in every direction)."""
     far = float(np.max(np.abs(integral.origin) + integral.reach))
     # float64 itself: far from the origin every stored point and pole is rounded to half an
@@ -226,6 +239,8 @@ def _input(integral: SolidIntegral, props: MassProperties, cad: CadFile) -> Unce
     tau = integral.tolerance + 2 * float(np.spacing(far))
     if cad.digits is not None:
         tau += far * 0.5 * 10.0 ** (1 - cad.digits)
+    if sewn is not None:
+        tau += sewn * cad.scale
     if tau == 0:
         return None
     flux = 1.01 * tau * integral.area

@@ -70,7 +70,21 @@ def _occ() -> SimpleNamespace:
     from OCP.BRep import BRep_Tool
     from OCP.BRepAdaptor import BRepAdaptor_Curve2d
     from OCP.BRepTools import BRepTools
-    from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface, Geom_RectangularTrimmedSurface
+    from OCP.Geom import (
+        Geom_BezierCurve,
+        Geom_BezierSurface,
+        Geom_BSplineCurve,
+        Geom_BSplineSurface,
+        Geom_Circle,
+        Geom_Ellipse,
+        Geom_Hyperbola,
+        Geom_Line,
+        Geom_Parabola,
+        Geom_RectangularTrimmedSurface,
+        Geom_SurfaceOfLinearExtrusion,
+        Geom_SurfaceOfRevolution,
+        Geom_TrimmedCurve,
+    )
     from OCP.GeomConvert import GeomConvert
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_REVERSED, TopAbs_WIRE
     from OCP.TopExp import TopExp_Explorer
@@ -79,18 +93,23 @@ def _occ() -> SimpleNamespace:
     return SimpleNamespace(BRep_Tool=BRep_Tool, Curve2d=BRepAdaptor_Curve2d,
                            BRepTools=BRepTools, Bezier=Geom_BezierSurface,
                            BSpline=Geom_BSplineSurface, Trimmed=Geom_RectangularTrimmedSurface,
+                           Swept=(Geom_SurfaceOfRevolution, Geom_SurfaceOfLinearExtrusion),
+                           ExactCurves=(Geom_Line, Geom_Circle, Geom_Ellipse, Geom_Parabola,
+                                        Geom_Hyperbola, Geom_BSplineCurve, Geom_BezierCurve),
+                           TrimmedCurve=Geom_TrimmedCurve, RectTrim=Geom_RectangularTrimmedSurface,
                            GeomConvert=GeomConvert, EDGE=TopAbs_EDGE, WIRE=TopAbs_WIRE,
                            REVERSED=TopAbs_REVERSED, Explorer=TopExp_Explorer, TopoDS=TopoDS)
 
 
 def rectangle(face: Any) -> tuple[float, float, float, float] | None:
-    """(u1, u2, v1, v2) when the face is a B-spline or Bezier surface whose domain is that
-    parameter rectangle (one wire, every boundary curve on one side of it), else None."""
+    """(u1, u2, v1, v2) when the face's domain is that parameter rectangle (one wire, every
+    boundary curve on one side of it) and its surface is a B-spline or Bezier surface, or a
+    surface of revolution or linear extrusion of a curve that is exactly a (rational)
+    B-spline (a line, conic, B-spline or Bezier curve: `_surface_data` converts the patch
+    exactly), else None."""
     k = _occ()
-    surface = k.BRep_Tool.Surface_s(face)
-    while isinstance(surface, k.Trimmed):
-        surface = surface.BasisSurface()
-    if not isinstance(surface, (k.BSpline, k.Bezier)):
+    surface = _bare(k, face)
+    if not (isinstance(surface, (k.BSpline, k.Bezier)) or _exact_sweep(k, surface)):
         return None
     wires = k.Explorer(face, k.WIRE)
     wires.Next()
@@ -109,6 +128,8 @@ def rectangle(face: Any) -> tuple[float, float, float, float] | None:
                    for x, side in ((us, u1), (us, u2), (vs, v1), (vs, v2))):
             return None
         edges.Next()
+    if not isinstance(surface, (k.BSpline, k.Bezier)):
+        return u1, u2, v1, v2   # the converted patch is the rectangle itself
     # the rectangle must lie in the surface's own parameter range (a periodic surface's face
     # may sit a period further on): what the knots describe
     lo_u, hi_u, lo_v, hi_v = surface.Bounds()
@@ -117,6 +138,25 @@ def rectangle(face: Any) -> tuple[float, float, float, float] | None:
     if u1 is None or v1 is None:
         return None
     return u1, u2, v1, v2
+
+
+def _bare(k: SimpleNamespace, face: Any) -> Any:
+    """The face's surface with every rectangular trim taken off."""
+    surface = k.BRep_Tool.Surface_s(face)
+    while isinstance(surface, k.Trimmed):
+        surface = surface.BasisSurface()
+    return surface
+
+
+def _exact_sweep(k: SimpleNamespace, surface: Any) -> bool:
+    """A surface of revolution or extrusion whose swept curve GeomConvert turns into a
+    B-spline curve without approximation (an offset or other curve would be approximated)."""
+    if not isinstance(surface, k.Swept):
+        return False
+    curve = surface.BasisCurve()
+    while isinstance(curve, k.TrimmedCurve):
+        curve = curve.BasisCurve()
+    return isinstance(curve, k.ExactCurves)
 
 
 def _into_range(a: float, b: float, lo: float, hi: float, periodic: bool, tol: float
@@ -153,8 +193,7 @@ def _face(face: Any, box: tuple[float, float, float, float], apex: np.ndarray
     """(values, bar): values = [V, ∫x (3), ∫x xᵀ (9), area] of one face's share, bar the
     first 13's quadrature bound."""
     k = _occ()
-    u1, u2, v1, v2 = box
-    tu, pu, tv, pv, homogeneous = _surface_data(face)
+    tu, pu, tv, pv, homogeneous, (u1, u2, v1, v2) = _surface_data(face, box)
     sign = -1.0 if face.Orientation() == k.REVERSED else 1.0
     # Gauss-Legendre with n points is exact to degree 2n-1: r·N x x of a polynomial patch has
     # degree ~5p in each direction, so the first order integrates that case exactly
@@ -180,14 +219,29 @@ def _face(face: Any, box: tuple[float, float, float, float], apex: np.ndarray
         n += NURBS_ORDER_STEP
 
 
-def _surface_data(face: Any) -> tuple[np.ndarray, int, np.ndarray, int, np.ndarray]:
-    """(u knots, u degree, v knots, v degree, homogeneous poles (nu, nv, 4): w x, w y, w z, w)
-    of the face's surface, non-periodic, its location applied."""
+def _surface_data(face: Any, box: tuple[float, float, float, float]
+                  ) -> tuple[np.ndarray, int, np.ndarray, int, np.ndarray, tuple]:
+    """(u knots, u degree, v knots, v degree, homogeneous poles (nu, nv, 4): w x, w y, w z, w,
+    the rectangle to integrate over) of the face's surface, non-periodic, its location
+    applied. A swept surface's patch over ``box`` is converted exactly (GeomConvert: the
+    swept curve's B-spline form times a line or rational circle arcs) and integrated over its
+    own whole domain; ValueError when the converted patch's corners are not the face's."""
     k = _occ()
-    surface = k.BRep_Tool.Surface_s(face)
-    while isinstance(surface, k.Trimmed):
-        surface = surface.BasisSurface()
-    if isinstance(surface, k.Bezier):
+    surface = _bare(k, face)
+    if isinstance(surface, k.Swept):
+        original = k.BRep_Tool.Surface_s(face)   # with the face's location, as the conversion
+        surface = k.GeomConvert.SurfaceToBSplineSurface_s(k.RectTrim(original, *box))
+        lo_u, hi_u, lo_v, hi_v = surface.Bounds()
+        corners = [(np.array(original.Value(u, v).Coord()),
+                    np.array(surface.Value(cu, cv).Coord()))
+                   for (u, cu) in ((box[0], lo_u), (box[1], hi_u))
+                   for (v, cv) in ((box[2], lo_v), (box[3], hi_v))]
+        size = max(np.abs(a).max() for a, _ in corners) + max(
+            np.abs(a - b).max() for a, _ in corners for b, _ in corners)
+        if max(np.abs(a - b).max() for a, b in corners) > 1e-9 * size:
+            raise ValueError("the converted patch is not the face's")
+        box = (lo_u, hi_u, lo_v, hi_v)
+    elif isinstance(surface, k.Bezier):
         surface = k.GeomConvert.SurfaceToBSplineSurface_s(surface)
     else:
         surface = surface.Copy()   # the periodic flags are changed below: not on the file's
@@ -204,7 +258,7 @@ def _surface_data(face: Any) -> tuple[np.ndarray, int, np.ndarray, int, np.ndarr
             h[i, j] = (w * p.X(), w * p.Y(), w * p.Z(), w)
     tu = _flat_knots(surface.UKnot, surface.UMultiplicity, surface.NbUKnots())
     tv = _flat_knots(surface.VKnot, surface.VMultiplicity, surface.NbVKnots())
-    return tu, surface.UDegree(), tv, surface.VDegree(), h
+    return tu, surface.UDegree(), tv, surface.VDegree(), h, box
 
 
 def _flat_knots(knot: Any, multiplicity: Any, count: int) -> np.ndarray:
