@@ -239,3 +239,35 @@ def write_iges_faces(shape, path, unit: str = "MM") -> None:
     writer.AddShape(shape)
     writer.ComputeModel()
     assert writer.Write(str(path))
+
+
+PROFILE = ((3.0, 0.0), (2.2, 1.8), (0.3, 2.6), (-1.6, 1.9), (-2.8, 0.2), (-2.0, -1.7),
+           (0.1, -2.4), (2.1, -1.5))
+"""Poles of a periodic cubic B-spline profile (uniform knots 0..8): a smooth convex blob."""
+
+
+def bspline_prism(poles=PROFILE, height: float = 1.5, at: tuple = (0.0, 0.0, 0.0)):
+    """The prism of a periodic cubic B-spline profile in the plane z = at[2] (poles offset by
+    at[0], at[1]), extruded by ``height`` along z: a surface of linear extrusion for its side,
+    two planes bounded by the spline for its caps."""
+    from OCP.BRepBuilderAPI import (
+        BRepBuilderAPI_MakeEdge,
+        BRepBuilderAPI_MakeFace,
+        BRepBuilderAPI_MakeWire,
+    )
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism
+    from OCP.collections import Array1_double, Array1_gp_Pnt, Array1_int
+    from OCP.Geom import Geom_BSplineCurve
+
+    n = len(poles)
+    points = Array1_gp_Pnt(1, n)
+    for i, (x, y) in enumerate(poles):
+        points.SetValue(i + 1, gp_Pnt(x + at[0], y + at[1], at[2]))
+    knots, mults = Array1_double(1, n + 1), Array1_int(1, n + 1)
+    for i in range(n + 1):
+        knots.SetValue(i + 1, float(i))
+        mults.SetValue(i + 1, 1)
+    curve = Geom_BSplineCurve(points, knots, mults, 3, True)
+    wire = BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(curve).Edge()).Wire()
+    face = BRepBuilderAPI_MakeFace(wire).Face()
+    return BRepPrimAPI_MakePrism(face, gp_Vec(0, 0, height)).Shape()

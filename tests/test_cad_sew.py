@@ -37,6 +37,16 @@ def _within(solid, volume, com, diag, scale):
     assert np.all(err_j <= sum(b.inertia for b in bars))
     # the bar is the file's tolerance at work, not a shrug: a few 1e-5 of the part at most
     assert sum(b.volume for b in bars) <= 1e-3 * volume * scale**3
+    # the walls (surfaces of revolution in IGES) by our own rule: its bar covers its error
+    # against the closed forms and says something (within 100x, or at most 1e-13 relative)
+    q = solid.integration
+    if q is not None:
+        r = solid.properties.uncertainty.rounding
+        err_v = abs(p.volume - volume * scale**3)
+        assert err_v <= q.volume + r.volume
+        assert q.volume <= max(100 * err_v, 1e-13 * p.volume)
+        assert np.all(err_j <= q.inertia + r.inertia)
+        assert np.all(q.inertia <= np.maximum(100 * err_j, 1e-13 * np.abs(p.inertia).max()))
 
 
 @pytest.mark.parametrize("kind,a,unit", PARTS)

@@ -5,13 +5,14 @@ wheel, import name ``OCP``), which is imported only when a CAD file is read: imp
 package costs nothing and mesh commands never load the ~0.8 s kernel.
 
 Modules: ``occ`` (the kernel import and its missing-extra error), ``read`` (files to solids with
-names, assembly paths, placements and units), ``labels`` (names, colours, materials), ``faces``
-(the face census and an area bound), ``integrate`` (one solid about a local origin, with its
-error bars), ``freeform`` and ``nurbs`` (free-form faces: our Gauss rule per knot span and
-OpenCASCADE's adaptive one), ``shell`` (``--shell T``: faces as a wall's mid-surface),
-``sew`` (loose faces, as IGES face mode writes them, sewn into closed solids),
-``inspect`` (per-solid results, densities by name, the total), ``write`` (align: exact geometry
-moved into the principal frame, or tessellated), ``tessellate`` (a shape as triangles).
+names, assembly paths, placements and units), ``sew`` (loose faces, as IGES face mode writes
+them, sewn into closed solids), ``labels`` (names, colours, materials), ``faces`` (the face
+census and an area bound), ``integrate`` (one solid about a local origin, with its error
+bars), ``freeform``, ``nurbs`` and ``planar`` (free-form faces: our Gauss rule per knot span,
+planes by Green's theorem along their edges, OpenCASCADE's adaptive rule on the rest),
+``shell`` (``--shell T``: faces as a wall's mid-surface), ``inspect`` (per-solid results,
+densities by name, the total), ``write`` (align: exact geometry moved into the principal
+frame, or tessellated), ``tessellate`` (a shape as triangles).
 """
 
 from __future__ import annotations

@@ -1,15 +1,18 @@
-"""A solid with free-form faces: our own rule where a face's domain is a parameter rectangle,
-OpenCASCADE's adaptive rule on the rest, each with its error bar.
+"""A solid with free-form faces: our own rules where we have one, OpenCASCADE's adaptive rule
+on the rest, each with its error bar.
 
-Faces found by `massprops.cad.nurbs.rectangle` are integrated there (to round-off, bar from
-two orders of Gauss-Legendre per knot span). The other faces (trimmed free-form, analytic) go to
-``BRepGProp`` together, as one open compound: analytic-only, by its fixed Gauss rule (exact);
-else by its adaptive rule at the nested tolerances ``CAD_ADAPTIVE_EPS`` (bar from their
-difference, as before). Each face's share is the cone from OpenCASCADE's apex (the mean of
-the compound's vertices) in both parts, so the parts add up. OpenCASCADE returns volume, centre
-and inertia about the centre, from which the raw moments about the origin are recovered; when
-its part encloses almost no volume (below ``1e-3`` of the box's), that recovery would divide by
-~0, and the whole solid goes to the adaptive rule instead.
+Ours: faces found by `massprops.cad.nurbs.rectangle` (B-spline, Bezier, revolution and
+extrusion faces whose domain is their parameter rectangle: to round-off, bar from two orders
+of Gauss-Legendre per knot span) and every planar face (`massprops.cad.planar`: Green's theorem
+along its edges, bar from two orders per smooth piece). The other faces (trimmed free-form,
+trimmed analytic) go to ``BRepGProp`` together, as one open compound: analytic surfaces with
+lines and conics for edges by its fixed Gauss rule (exact); else by its adaptive rule at the
+nested tolerances ``CAD_ADAPTIVE_EPS`` (bar from their difference). Each face's share is the
+cone from OpenCASCADE's apex (the mean of the compound's vertices) in both parts, so the parts
+add up. OpenCASCADE returns volume, centre and inertia about the centre, from which the raw
+moments about the origin are recovered; when its part encloses almost no volume (below
+``1e-3`` of the box's), that recovery would divide by ~0, and the whole solid goes to the
+adaptive rule instead.
 """
 
 from __future__ import annotations
@@ -20,8 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from massprops.cad.faces import ANALYTIC_FACES, face_census, is_analytic, occ_area
-from massprops.cad.nurbs import RawMoments, integrate_rectangles, rectangle
+from massprops.cad.faces import ANALYTIC_FACES, conic_edges, face_census, is_analytic, occ_area
+from massprops.cad.nurbs import RawMoments, rectangle, rectangle_face
+from massprops.cad.planar import is_plane, plane_face
 from massprops.mesh.facesums import U
 from massprops.tolerances import (
     CAD_ADAPTIVE_EPS,
@@ -60,23 +64,23 @@ def integrate_free_form(local: Any, only_closed: bool, box_volume: float,
     centre: its bounding box's. method: "own" (every face by our rule), "mixed", or
     "adaptive" (all by OpenCASCADE's)."""
     k = _occ()
-    rects, rest = [], []
+    rects, rest = [], []   # ours (a rectangle, or None for a plane), OpenCASCADE's
     explorer = k.Explorer(local, k.FACE)
     while explorer.More():
         face = k.TopoDS.Face(explorer.Current())
         box = rectangle(face)
-        if box is None:
+        if box is None and not is_plane(face):
             rest.append(face)
         else:
             rects.append((face, box))
         explorer.Next()
     free_rest = [face for face in rest if not is_analytic(face)]
-    everything = [face for face, _ in rects] + free_rest
+    everything = [face for face, box in rects if box is not None] + free_rest
     if not rects:
         return (*_adaptive(local, only_closed), occ_area(everything))
     try:
         if not rest:
-            raw = integrate_rectangles(rects)
+            raw = _own(rects, np.zeros(3))
             return (*_central(raw), "own", raw.area)
         raw = _mixed(rects, rest, box_volume, centre)
     except ValueError:   # a surface our rule does not take or settle on: all to OpenCASCADE
@@ -114,8 +118,9 @@ def _mixed(rects: list, rest: list, box_volume: float, centre: tuple[float, floa
     builder.Add(compound, k.MakeVertex(k.gp_Pnt(*((count + 1) * np.asarray(centre) - total))
                                        ).Vertex())
     count, total = _vertex_sum(compound)
-    raw = integrate_rectangles(rects, total / count)
-    analytic = all(kind in ANALYTIC_FACES for kind in face_census(compound)[0])
+    raw = _own(rects, total / count)
+    analytic = all(kind in ANALYTIC_FACES for kind in face_census(compound)[0]) and \
+        conic_edges(compound)
     levels = occ_levels(compound, False, analytic)
     if abs(levels[-1][0]) < 1e-3 * box_volume:
         return None
@@ -127,6 +132,24 @@ def _mixed(rects: list, rest: list, box_volume: float, centre: tuple[float, floa
                       raw.second + last[4:].reshape(3, 3), raw.volume_err + bar[0],
                       raw.first_err + bar[1:4], raw.second_err + bar[4:].reshape(3, 3),
                       raw.area)
+
+
+def _own(faces: list, apex: np.ndarray) -> RawMoments:
+    """The raw moments of our faces (rectangle faces, and planes: box None), each face's share
+    the cone from ``apex``, summed with their bars; ValueError when a rule does not settle.
+    area: the free-form faces' only (the census bounds the planes' already)."""
+    total = np.zeros(14)
+    err = np.zeros(13)
+    for face, box in faces:
+        if box is None:
+            values, bar = plane_face(face, apex)
+            values[13] = 0.0
+        else:
+            values, bar = rectangle_face(face, box, apex)
+        total += values
+        err += bar
+    return RawMoments(float(total[0]), total[1:4], total[4:13].reshape(3, 3), float(err[0]),
+                      err[1:4], err[4:13].reshape(3, 3), float(total[13]))
 
 
 def _vertex_sum(shape: Any) -> tuple[int, np.ndarray]:

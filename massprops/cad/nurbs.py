@@ -47,7 +47,7 @@ from massprops.tolerances import (
     NURBS_RATIONAL_START,
 )
 
-__all__ = ["RawMoments", "integrate_rectangles", "rectangle"]
+__all__ = ["RawMoments", "cone_moments", "rectangle", "rectangle_face"]
 
 
 @dataclass(frozen=True)
@@ -171,27 +171,12 @@ def _into_range(a: float, b: float, lo: float, hi: float, periodic: bool, tol: f
     return max(a, lo), min(b, hi)
 
 
-def integrate_rectangles(faces: list[tuple[Any, tuple[float, float, float, float]]],
-                         apex: np.ndarray | None = None) -> RawMoments:
-    """The raw moments about the origin of the faces (each with its rectangle from
-    `rectangle`), each face's share being the cone from ``apex`` (default the origin) over
-    it, summed. ValueError when a surface does not evaluate there or the rule does not settle
-    by ``NURBS_MAX_ORDER`` (the caller falls back)."""
-    apex = np.zeros(3) if apex is None else np.asarray(apex, dtype=float)
-    total = np.zeros(14)
-    err = np.zeros(13)
-    for face, box in faces:
-        values, bar = _face(face, box, apex)
-        total += values
-        err += bar
-    return RawMoments(float(total[0]), total[1:4], total[4:13].reshape(3, 3), float(err[0]),
-                      err[1:4], err[4:13].reshape(3, 3), float(total[13]))
-
-
-def _face(face: Any, box: tuple[float, float, float, float], apex: np.ndarray
-          ) -> tuple[np.ndarray, np.ndarray]:
-    """(values, bar): values = [V, ∫x (3), ∫x xᵀ (9), area] of one face's share, bar the
-    first 13's quadrature bound."""
+def rectangle_face(face: Any, box: tuple[float, float, float, float], apex: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """(values, bar): values = [V, ∫x (3), ∫x xᵀ (9), area] of the cone from ``apex`` over
+    the face (its rectangle from `rectangle`), bar the first 13's quadrature bound.
+    ValueError when the surface does not evaluate there or the rule does not settle by
+    ``NURBS_MAX_ORDER`` (the caller falls back)."""
     k = _occ()
     tu, pu, tv, pv, homogeneous, (u1, u2, v1, v2) = _surface_data(face, box)
     sign = -1.0 if face.Orientation() == k.REVERSED else 1.0
@@ -310,19 +295,27 @@ def _rule(n: int, tu: np.ndarray, pu: int, tv: np.ndarray, pv: int, h: np.ndarra
     for start in range(0, len(u), rows):
         block = slice(start, start + rows)
         sums += _block(bu[block], dbu[block], wu[block], bv, dbv, wv, h, p)
-    volume, first_d, dd, area = sums[0], sums[1:4], sums[4:13].reshape(3, 3), sums[13]
-    # the cone from the apex over each patch: points apex + t d, t in [0, 1], dV = t² dt d·N
     values = np.empty(14)
-    values[0] = volume / 3
-    values[1:4] = p * values[0] + first_d / 4
-    cross = np.outer(p, first_d)
-    values[4:13] = (np.outer(p, p) * values[0] + (cross + cross.T) / 4 + dd / 5).ravel()
-    values[13] = area
+    values[:13] = cone_moments(p, sums[0], sums[1:4], sums[4:13].reshape(3, 3))
+    values[13] = sums[13]
     scale = np.empty(13)
     scale[0] = sums[14] / 3
     scale[1:4] = sums[15] / 3
     scale[4:13] = sums[16] / 3
     return values, scale
+
+
+def cone_moments(apex: np.ndarray, flux: float, first: np.ndarray, second: np.ndarray
+                 ) -> np.ndarray:
+    """[V, ∫x (3), ∫x xᵀ (9)] of the cone from ``apex`` over a surface, from its flux sums
+    ∫ d·N dA, ∫ (d·N) d dA, ∫ (d·N) d dᵀ dA (d = S - apex, N the outward normal): the cone's
+    points apex + t d, t in [0, 1], have dV = t² dt d·N dA."""
+    out = np.empty(13)
+    out[0] = flux / 3
+    out[1:4] = apex * out[0] + first / 4
+    cross = np.outer(apex, first)
+    out[4:13] = (np.outer(apex, apex) * out[0] + (cross + cross.T) / 4 + second / 5).ravel()
+    return out
 
 
 def _block(bu: np.ndarray, dbu: np.ndarray, wu: np.ndarray, bv: np.ndarray, dbv: np.ndarray,
