@@ -172,11 +172,10 @@ def table_orders():
     for name, (shape, v) in forms.items():
         explorer = TopExp_Explorer(BRepBuilderAPI_NurbsConvert(shape, True).Shape(), TopAbs_FACE)
         face = TopoDS.Face(explorer.Current())
-        box = rectangle(face)
-        data = _surface_data(face)
+        data = _surface_data(face, rectangle(face))
         for n in (7, 9, 11, 13, 15, 17):
-            def run(n=n, d=data, b=box):
-                return _rule(n, *d[:4], d[4], b[:2], b[2:], np.zeros(3))
+            def run(n=n, d=data):
+                return _rule(n, *d[:4], d[4], d[5][:2], d[5][2:], np.zeros(3))
 
             t = best_time(run, repeat=3)
             values, _ = run()

@@ -135,6 +135,13 @@ CAD_INTEGRATION_SAFETY = 2.0
 """The integration bar is this multiple of the difference between the last two adaptive levels
 (the geometric convergence above leaves a true error ~1/15 of it; 2 covers a slower step)."""
 
+CAD_FLAT_RTOL = 1e-14
+"""A B-spline or Bezier face whose poles lie within this fraction of their extent from one plane
+is integrated as that plane (Green's theorem along its edges, `massprops.cad.planar`), the
+poles' distance added to its bar (δ x area on the volume): NURBS conversions of planes keep
+their poles coplanar to round-off (~1e-16), so this takes them and leaves any curved face,
+whose bar would otherwise grow past 1e-14."""
+
 CAD_ROUNDING_ULPS = 64.0
 """OpenCASCADE's integral offers no rounding bound: the bar charges this many units of
 round-off per face on each quantity's natural scale about the local origin (Gauss sums of a few

@@ -271,3 +271,37 @@ def bspline_prism(poles=PROFILE, height: float = 1.5, at: tuple = (0.0, 0.0, 0.0
     wire = BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(curve).Edge()).Wire()
     face = BRepBuilderAPI_MakeFace(wire).Face()
     return BRepPrimAPI_MakePrism(face, gp_Vec(0, 0, height)).Shape()
+
+
+def slanted_cylinder(r: float, h: float, m: float):
+    """x² + y² <= r², 0 <= z <= h + m x (h > m r): a cylinder cut by an oblique plane, its wall
+    trimmed by an ellipse (not an iso-line of its parameters)."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeHalfSpace
+    from OCP.gp import gp_Pln
+
+    tall = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), r,
+                                    2 * (h + abs(m) * r)).Shape()
+    plane = BRepBuilderAPI_MakeFace(gp_Pln(gp_Pnt(0, 0, h), gp_Dir(-m, 0, 1))).Face()
+    above = BRepPrimAPI_MakeHalfSpace(plane, gp_Pnt(0, 0, 2 * (h + abs(m) * r))).Solid()
+    return BRepAlgoAPI_Cut(tall, above).Shape()
+
+
+def slanted_cylinder_forms(r: float, h: float, m: float) -> tuple[float, tuple, list]:
+    """(volume, COM, inertia per unit density about the COM) of slanted_cylinder, from the
+    disc's moments (∫x² = π r⁴/4) integrated over z in [0, h + m x]."""
+    pi = math.pi
+    area, x2 = pi * r * r, pi * r**4 / 4
+    v = area * h
+    first = (m * x2, 0.0, (h * h * area + m * m * x2) / 2)
+    xx, yy = h * x2, h * x2
+    zz = (h**3 * area + 3 * h * m * m * x2) / 3
+    xz = h * m * x2
+    com = tuple(f / v for f in first)
+    second = [[xx, 0.0, xz], [0.0, yy, 0.0], [xz, 0.0, zz]]
+    c = com
+    s = [[second[i][j] - v * c[i] * c[j] for j in range(3)] for i in range(3)]
+    trace = s[0][0] + s[1][1] + s[2][2]
+    inertia = [[(trace if i == j else 0.0) - s[i][j] for j in range(3)] for i in range(3)]
+    return v, com, inertia

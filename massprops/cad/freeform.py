@@ -5,8 +5,8 @@ Ours: faces found by `massprops.cad.nurbs.rectangle` (B-spline, Bezier, revoluti
 extrusion faces whose domain is their parameter rectangle: to round-off, bar from two orders
 of Gauss-Legendre per knot span) and every planar face (`massprops.cad.planar`: Green's theorem
 along its edges, bar from two orders per smooth piece). The other faces (trimmed free-form,
-trimmed analytic) go to ``BRepGProp`` together, as one open compound: analytic surfaces with
-lines and conics for edges by its fixed Gauss rule (exact); else by its adaptive rule at the
+trimmed analytic) go to ``BRepGProp`` together, as one open compound: by its fixed Gauss rule
+when that is exact (`massprops.cad.faces.fixed_rule_exact`); else by its adaptive rule at the
 nested tolerances ``CAD_ADAPTIVE_EPS`` (bar from their difference). Each face's share is the
 cone from OpenCASCADE's apex (the mean of the compound's vertices) in both parts, so the parts
 add up. OpenCASCADE returns volume, centre and inertia about the centre, from which the raw
@@ -23,9 +23,15 @@ from typing import Any
 
 import numpy as np
 
-from massprops.cad.faces import ANALYTIC_FACES, conic_edges, face_census, is_analytic, occ_area
+from massprops.cad.faces import (
+    ANALYTIC_FACES,
+    face_census,
+    fixed_rule_exact,
+    is_analytic,
+    occ_area,
+)
 from massprops.cad.nurbs import RawMoments, rectangle, rectangle_face
-from massprops.cad.planar import is_plane, plane_face
+from massprops.cad.planar import plane_face, plane_frame
 from massprops.mesh.facesums import U
 from massprops.tolerances import (
     CAD_ADAPTIVE_EPS,
@@ -68,19 +74,23 @@ def integrate_free_form(local: Any, only_closed: bool, box_volume: float,
     explorer = k.Explorer(local, k.FACE)
     while explorer.More():
         face = k.TopoDS.Face(explorer.Current())
-        box = rectangle(face)
-        if box is None and not is_plane(face):
+        frame = plane_frame(face)
+        box = rectangle(face) if frame is None else None
+        if box is None and frame is None:
             rest.append(face)
         else:
-            rects.append((face, box))
+            rects.append((face, box, frame))
         explorer.Next()
     free_rest = [face for face in rest if not is_analytic(face)]
-    everything = [face for face, box in rects if box is not None] + free_rest
+    everything = [face for face, box, _ in rects if box is not None] + free_rest
     if not rects:
         return (*_adaptive(local, only_closed), occ_area(everything))
     try:
         if not rest:
-            raw = _own(rects, np.zeros(3))
+            # about the box's centre: the bars, first order in the moments about that point,
+            # grow with the COM's distance from it (a cylinder about its base: 1.6e-13 in
+            # inertia, for an error of 1.5e-15)
+            raw = _own(rects, np.asarray(centre, dtype=float))
             return (*_central(raw), "own", raw.area)
         raw = _mixed(rects, rest, box_volume, centre)
     except ValueError:   # a surface our rule does not take or settle on: all to OpenCASCADE
@@ -120,36 +130,39 @@ def _mixed(rects: list, rest: list, box_volume: float, centre: tuple[float, floa
     count, total = _vertex_sum(compound)
     raw = _own(rects, total / count)
     analytic = all(kind in ANALYTIC_FACES for kind in face_census(compound)[0]) and \
-        conic_edges(compound)
+        fixed_rule_exact(compound)
     levels = occ_levels(compound, False, analytic)
     if abs(levels[-1][0]) < 1e-3 * box_volume:
         return None
-    raws = [_raw(values) for values in levels]
+    raws = [_raw(values, raw.about) for values in levels]
     last = raws[-1]
     bar = (np.zeros(13) if analytic else
            CAD_INTEGRATION_SAFETY * np.abs(last - raws[-2]) + 4 * U * np.abs(last))
     return RawMoments(raw.volume + last[0], raw.first + last[1:4],
                       raw.second + last[4:].reshape(3, 3), raw.volume_err + bar[0],
                       raw.first_err + bar[1:4], raw.second_err + bar[4:].reshape(3, 3),
-                      raw.area)
+                      raw.area, raw.about)
 
 
 def _own(faces: list, apex: np.ndarray) -> RawMoments:
-    """The raw moments of our faces (rectangle faces, and planes: box None), each face's share
-    the cone from ``apex``, summed with their bars; ValueError when a rule does not settle.
-    area: the free-form faces' only (the census bounds the planes' already)."""
+    """The raw moments about ``apex`` of our faces (face, its rectangle or None, its plane's
+    frame from `plane_frame` or None), each face's share the cone from the apex, summed with
+    their bars; ValueError when a rule does not settle. area: the free-form faces' only (the
+    census bounds the true planes' already; a flat spline's counts)."""
     total = np.zeros(14)
     err = np.zeros(13)
-    for face, box in faces:
-        if box is None:
-            values, bar = plane_face(face, apex)
-            values[13] = 0.0
-        else:
+    for face, box, frame in faces:
+        if box is not None:
             values, bar = rectangle_face(face, box, apex)
+        else:
+            values, bar = plane_face(face, apex, frame)
+            if is_analytic(face):   # a true plane
+                values[13] = 0.0
         total += values
         err += bar
     return RawMoments(float(total[0]), total[1:4], total[4:13].reshape(3, 3), float(err[0]),
-                      err[1:4], err[4:13].reshape(3, 3), float(total[13]))
+                      err[1:4], err[4:13].reshape(3, 3), float(total[13]),
+                      np.asarray(apex, dtype=float))
 
 
 def _vertex_sum(shape: Any) -> tuple[int, np.ndarray]:
@@ -219,25 +232,28 @@ def values(props: Any) -> Values:
     return props.Mass(), np.array([c.X(), c.Y(), c.Z()]), j
 
 
-def _raw(v: Values) -> np.ndarray:
-    """[V, ∫x (3), ∫x xᵀ (9)] about the origin from (volume, COM, inertia about the COM)."""
+def _raw(v: Values, about: np.ndarray) -> np.ndarray:
+    """[V, ∫d (3), ∫d dᵀ (9)], d = x - about, from (volume, COM, inertia about the COM)."""
     volume, com, inertia = v
-    second = np.trace(inertia) / 2 * np.eye(3) - inertia + volume * np.outer(com, com)
-    return np.concatenate(([volume], volume * com, second.ravel()))
+    c = com - about
+    second = np.trace(inertia) / 2 * np.eye(3) - inertia + volume * np.outer(c, c)
+    return np.concatenate(([volume], volume * c, second.ravel()))
 
 
 def _central(raw: RawMoments) -> tuple[Values, tuple[float, np.ndarray, np.ndarray]]:
     """Raw moments and their bars to (volume, COM, inertia about the COM) and first-order
     bars of those."""
     volume = raw.volume
-    com = raw.first / volume
-    second = raw.second - volume * np.outer(com, com)
+    local = raw.first / volume          # the COM from ``about``
+    com = raw.about + local
+    second = raw.second - volume * np.outer(local, local)
     inertia = np.trace(second) * np.eye(3) - second
     dv = raw.volume_err
-    dc = (raw.first_err + np.abs(com) * dv) / abs(volume)
-    ac = np.abs(com)
+    dc = (raw.first_err + np.abs(local) * dv) / abs(volume)
+    ac = np.abs(local)
     d_outer = abs(volume) * (np.outer(ac, dc) + np.outer(dc, ac)) + np.outer(ac, ac) * dv
     d_second = raw.second_err + d_outer
     d_inertia = np.trace(d_second) * np.eye(3) + d_second
     return ((volume, com, inertia),
-            (dv + 4 * U * abs(volume), dc + 4 * U * ac, d_inertia + 4 * U * np.abs(inertia)))
+            (dv + 4 * U * abs(volume), dc + 4 * U * np.abs(com),
+             d_inertia + 4 * U * np.abs(inertia)))

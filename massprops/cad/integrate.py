@@ -7,14 +7,15 @@ offset costs nothing (about the world origin a cylinder 1e7 sizes away comes out
 The results are moved back in float64 (COM = origin + local COM; the inertia is already about
 the COM) and converted to SI only now: scaling far-away coordinates first would round them.
 
-Faces that are all analytic (plane, cylinder, cone, sphere, torus) with edges that are all
-lines and conics are integrated by the fixed Gauss rules, exact to round-off: ``integration``
-is None. With any free-form face (B-spline, Bezier, revolution, extrusion, offset, other) or
-free-form edge, see `massprops.cad.freeform`: B-spline, Bezier, revolution and extrusion faces
-whose domain is their parameter rectangle by our own Gauss-Legendre rule per knot span, planes
-by ours along their edges (Green's theorem), each to round-off with a bar from two orders; the
-rest by OpenCASCADE's adaptive rule at nested tolerances, with a bar from two levels
-(OpenCASCADE's own estimate is never the bar).
+Faces that are all analytic (plane, cylinder, cone, sphere, torus), with edges that are all
+lines and conics and curved faces bounded by their parameter lines
+(`massprops.cad.faces.fixed_rule_exact`), are integrated by the fixed Gauss rules, exact to
+round-off: ``integration`` is None. Otherwise see `massprops.cad.freeform`: B-spline, Bezier,
+revolution and extrusion faces whose domain is their parameter rectangle by our own
+Gauss-Legendre rule per knot span, planes (and flat splines) by ours along their edges
+(Green's theorem), each to round-off with a bar from two orders; the rest by OpenCASCADE's
+adaptive rule at nested tolerances, with a bar from two levels (OpenCASCADE's own estimate is
+never the bar).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from massprops.cad.faces import ANALYTIC_FACES, conic_edges, face_census
+from massprops.cad.faces import ANALYTIC_FACES, face_census, fixed_rule_exact
 from massprops.cad.freeform import integrate_free_form, occ_levels
 from massprops.errors import DegenerateMeshError
 from massprops.mesh.facesums import U
@@ -69,8 +70,9 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
 
     faces, area, free = face_census(local, free_area=False)
     tolerance = float(k.ShapeTolerance().Tolerance(local, 1, k.SHAPE))  # 1: the largest
-    # analytic faces bounded by a B-spline edge are not exact by the fixed rule either
-    free_form = bool(free) or not conic_edges(local)
+    # analytic faces with a free-form edge, or curved ones trimmed off their parameter lines,
+    # are not exact by the fixed rule either
+    free_form = bool(free) or not fixed_rule_exact(local)
 
     n = sum(faces.values())
     box_volume = 8 * half[0] * half[1] * half[2]

@@ -52,8 +52,8 @@ __all__ = ["RawMoments", "cone_moments", "rectangle", "rectangle_face"]
 
 @dataclass(frozen=True)
 class RawMoments:
-    """∫dV, ∫x dV (3,), ∫x xᵀ dV (3, 3) about the shape's own origin (file unit), each with
-    a bound of the quadrature's remaining error; area: ∫dA of the faces."""
+    """∫dV, ∫d dV (3,), ∫d dᵀ dV (3, 3), d = x - about, about the point ``about`` (file unit),
+    each with a bound of the quadrature's remaining error; area: ∫dA of the faces."""
 
     volume: float
     first: np.ndarray
@@ -62,6 +62,7 @@ class RawMoments:
     first_err: np.ndarray
     second_err: np.ndarray
     area: float
+    about: np.ndarray
 
 
 @functools.cache
@@ -173,8 +174,9 @@ def _into_range(a: float, b: float, lo: float, hi: float, periodic: bool, tol: f
 
 def rectangle_face(face: Any, box: tuple[float, float, float, float], apex: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray]:
-    """(values, bar): values = [V, ∫x (3), ∫x xᵀ (9), area] of the cone from ``apex`` over
-    the face (its rectangle from `rectangle`), bar the first 13's quadrature bound.
+    """(values, bar): values = [V, ∫d (3), ∫d dᵀ (9), area] of the cone from ``apex`` over
+    the face (its rectangle from `rectangle`), about the apex (d = x - apex), bar the first
+    13's quadrature bound.
     ValueError when the surface does not evaluate there or the rule does not settle by
     ``NURBS_MAX_ORDER`` (the caller falls back)."""
     k = _occ()
@@ -296,7 +298,7 @@ def _rule(n: int, tu: np.ndarray, pu: int, tv: np.ndarray, pv: int, h: np.ndarra
         block = slice(start, start + rows)
         sums += _block(bu[block], dbu[block], wu[block], bv, dbv, wv, h, p)
     values = np.empty(14)
-    values[:13] = cone_moments(p, sums[0], sums[1:4], sums[4:13].reshape(3, 3))
+    values[:13] = cone_moments(sums[0], sums[1:4], sums[4:13].reshape(3, 3))
     values[13] = sums[13]
     scale = np.empty(13)
     scale[0] = sums[14] / 3
@@ -305,23 +307,21 @@ def _rule(n: int, tu: np.ndarray, pu: int, tv: np.ndarray, pv: int, h: np.ndarra
     return values, scale
 
 
-def cone_moments(apex: np.ndarray, flux: float, first: np.ndarray, second: np.ndarray
-                 ) -> np.ndarray:
-    """[V, ∫x (3), ∫x xᵀ (9)] of the cone from ``apex`` over a surface, from its flux sums
-    ∫ d·N dA, ∫ (d·N) d dA, ∫ (d·N) d dᵀ dA (d = S - apex, N the outward normal): the cone's
-    points apex + t d, t in [0, 1], have dV = t² dt d·N dA."""
+def cone_moments(flux: float, first: np.ndarray, second: np.ndarray) -> np.ndarray:
+    """[V, ∫d (3), ∫d dᵀ (9)] of the cone from an apex over a surface, about that apex, from its
+    flux sums ∫ d·N dA, ∫ (d·N) d dA, ∫ (d·N) d dᵀ dA (d = S - apex, N the outward normal): the
+    cone's points apex + t d, t in [0, 1], have dV = t² dt d·N dA."""
     out = np.empty(13)
     out[0] = flux / 3
-    out[1:4] = apex * out[0] + first / 4
-    cross = np.outer(apex, first)
-    out[4:13] = (np.outer(apex, apex) * out[0] + (cross + cross.T) / 4 + second / 5).ravel()
+    out[1:4] = first / 4
+    out[4:13] = (second / 5).ravel()
     return out
 
 
 def _block(bu: np.ndarray, dbu: np.ndarray, wu: np.ndarray, bv: np.ndarray, dbv: np.ndarray,
            wv: np.ndarray, h: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Sums over a block of u rows (all v): Σ w d·N, Σ w d·N d, Σ w d·N d dᵀ, Σ w |N| (the
-    area), then Σ |w d·N|, Σ |w d·N| r, Σ |w d·N| r² (r = |d| + |P|), padded to 27."""
+    area), then Σ |w d·N|, Σ |w d·N| r, Σ |w d·N| r² (r = |d|), padded to 27."""
     nu, nv = h.shape[:2]
     flat = h.reshape(nu, nv * 4)
     along_v = (bu @ flat).reshape(-1, nv, 4)           # (mu, nv, 4)
@@ -342,7 +342,7 @@ def _block(bu: np.ndarray, dbu: np.ndarray, wu: np.ndarray, bv: np.ndarray, dbv:
     out[4:13] = ((d * wr[:, None]).T @ d).ravel()
     out[13] = np.sum(weight * np.linalg.norm(normal, axis=-1))
     wa = np.abs(wr)
-    r = np.linalg.norm(d, axis=1) + np.linalg.norm(p)
+    r = np.linalg.norm(d, axis=1)
     out[14] = wa.sum()
     out[15] = wa @ r
     out[16] = wa @ (r * r)
