@@ -47,7 +47,10 @@ class SolidIntegral:
     m, the bounding box's half extents. faces : {type: count}. valid : OpenCASCADE's BRepCheck
     verdict for solids with free-form faces (None: not checked; for analytic solids the check
     would cost more than the integral). An invalid shape (seen: a torus converted to NURBS 1e11
-    sizes from the origin) can integrate to anything, and the nested levels may agree on it."""
+    sizes from the origin) can integrate to anything, and the nested levels may agree on it.
+    anchor : (3,) the local origin in the FILE unit, as the float the geometry was shifted by
+    (``origin`` is that times the scale, rounded: a far part's COM is exact only as anchor +
+    local COM, which `massprops.cad.write` moves by in two steps)."""
 
     origin: np.ndarray
     moments: UnitMoments
@@ -58,6 +61,7 @@ class SolidIntegral:
     faces: dict[str, int]
     valid: bool | None = None
     method: str = "gauss"
+    anchor: np.ndarray | None = None
 
 
 def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = True
@@ -105,7 +109,7 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     if integration is not None:
         integration = (integration[0] * s**3, integration[1] * s, integration[2] * s**5)
     return SolidIntegral(origin * s, moments, integration, tolerance * s, area * s * s,
-                         reach * s, faces, valid, method)
+                         reach * s, faces, valid, method, origin)
 
 
 def localise(shape: Any) -> tuple[Any, np.ndarray, tuple, tuple]:
