@@ -1,8 +1,9 @@
 """CAD parts (STEP, IGES, BREP): exact mass properties of boundary-representation solids.
 
-Reading goes through OpenCASCADE (the optional extra ``massprops[cad]``, the ``cadquery-ocp``
-wheel, import name ``OCP``), which is imported only when a CAD file is read: importing this
-package costs nothing and mesh commands never load the ~0.8 s kernel.
+Reading goes through OpenCASCADE (the optional extra ``massprops[cad]``, the
+``cadquery-ocp-novtk`` wheel, or ``cadquery-ocp``: import name ``OCP`` for both), which is
+imported only when a CAD file is read: importing this package costs nothing and mesh commands
+never load the ~0.8 s kernel.
 
 Modules: ``occ`` (the kernel import and its missing-extra error), ``read`` (files to solids with
 names, assembly paths, placements and units), ``sew`` (loose faces, as IGES face mode writes
