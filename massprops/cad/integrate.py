@@ -76,7 +76,7 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     tolerance = float(k.ShapeTolerance().Tolerance(local, 1, k.SHAPE))  # 1: the largest
     # analytic faces with a free-form edge, or curved ones trimmed off their parameter lines,
     # are not exact by the fixed rule either
-    free_form = bool(free) or not fixed_rule_exact(local)
+    free_form = bool(free) or not fixed_rule_exact(local, faces)
 
     n = sum(faces.values())
     box_volume = 8 * half[0] * half[1] * half[2]
