@@ -9,8 +9,9 @@ Modules: ``occ`` (the kernel import and its missing-extra error), ``read`` (file
 names, assembly paths, placements and units), ``sew`` (loose faces, as IGES face mode writes
 them, sewn into closed solids), ``labels`` (names, colours, materials), ``faces`` (the face
 census and an area bound), ``integrate`` (one solid about a local origin, with its error
-bars), ``freeform``, ``nurbs`` and ``planar`` (free-form faces: our Gauss rule per knot span,
-planes by Green's theorem along their edges, OpenCASCADE's adaptive rule on the rest),
+bars), ``freeform``, ``nurbs``, ``planar`` and ``trimmed`` (free-form faces by our rules: per
+knot span on untrimmed faces, Green's theorem along a plane's edges and in a trimmed face's
+parameters),
 ``shell`` (``--shell T``: faces as a wall's mid-surface), ``inspect`` (per-solid results,
 densities by name, the total), ``write`` (align: exact geometry moved into the principal
 frame, or tessellated), ``tessellate`` (a shape as triangles).

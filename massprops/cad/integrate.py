@@ -85,8 +85,7 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
         volume, com, inertia = occ_levels(local, only_closed, True)[0]
     else:
         (volume, com, inertia), integration, method, free_area = integrate_free_form(
-            local, only_closed, box_volume,
-            centre if not origin.any() else (0.0, 0.0, 0.0))
+            local, only_closed, centre if not origin.any() else (0.0, 0.0, 0.0))
         area += free_area
 
     ulps = CAD_ROUNDING_ULPS * max(n, 1) * U
