@@ -305,3 +305,35 @@ def slanted_cylinder_forms(r: float, h: float, m: float) -> tuple[float, tuple, 
     trace = s[0][0] + s[1][1] + s[2][2]
     inertia = [[(trace if i == j else 0.0) - s[i][j] for j in range(3)] for i in range(3)]
     return v, com, inertia
+
+
+def profile_moments(poles):
+    """[A, ∫x, ∫y, ∫x², ∫y², ∫xy] of the region inside a periodic cubic B-spline (uniform
+    knots), by Green's theorem on each span, where the curve is a cubic polynomial: Gauss-
+    Legendre with 10 points is exact for the integrands' degree 11. The curve is evaluated by
+    scipy from the poles, independently of OpenCASCADE; and the same moments of a 200,000-gon
+    inscribed in it (shoelace formulas), which agree to its O(1/N²)."""
+    import numpy as np
+    from scipy.interpolate import BSpline
+
+    p = np.asarray(poles, dtype=float)
+    n = len(p)
+    spline = BSpline(np.arange(-3.0, n + 4), np.vstack([p, p[:3]]), 3)
+    slope = spline.derivative()
+    g, w = np.polynomial.legendre.leggauss(10)
+    total = np.zeros(6)
+    for k in range(n):
+        t = k + (g + 1) / 2
+        (x, y), (dx, dy) = spline(t).T, slope(t).T
+        total += [w @ (x * dy), w @ (x * x * dy), -w @ (y * y * dx), w @ (x**3 * dy) * 2 / 3,
+                  -w @ (y**3 * dx) * 2 / 3, w @ (x * x * y * dy)]
+    total /= [2, 4, 4, 4, 4, 4]   # the Gauss weights' 1/2 with Green's 1, 1/2, 1/2, 1/3, 1/3, 1/2
+    q = spline(np.linspace(0, n, 200_000, endpoint=False))
+    (x0, y0), (x1, y1) = q.T, np.roll(q, -1, axis=0).T
+    c = x0 * y1 - x1 * y0
+    gon = np.array([c.sum() / 2, ((x0 + x1) * c).sum() / 6, ((y0 + y1) * c).sum() / 6,
+                    ((x0 * x0 + x0 * x1 + x1 * x1) * c).sum() / 12,
+                    ((y0 * y0 + y0 * y1 + y1 * y1) * c).sum() / 12,
+                    ((x0 * y1 + 2 * x0 * y0 + 2 * x1 * y1 + x1 * y0) * c).sum() / 24])
+    assert np.all(np.abs(gon - total) <= 1e-9 * np.abs(total).max())
+    return total

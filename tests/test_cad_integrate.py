@@ -268,37 +268,6 @@ def test_a_face_the_rule_does_not_settle_on_goes_to_opencascade(monkeypatch):
     assert abs(integral.moments.volume - volume) <= integral.integration[0]
 
 
-def _profile_moments(poles):
-    """[A, ∫x, ∫y, ∫x², ∫y², ∫xy] of the region inside a periodic cubic B-spline (uniform
-    knots), by Green's theorem on each span, where the curve is a cubic polynomial: Gauss-
-    Legendre with 10 points is exact for the integrands' degree 11. The curve is evaluated by
-    scipy from the poles, independently of OpenCASCADE; and the same moments of a 200,000-gon
-    inscribed in it (shoelace formulas), which agree to its O(1/N²)."""
-    from scipy.interpolate import BSpline
-
-    p = np.asarray(poles, dtype=float)
-    n = len(p)
-    spline = BSpline(np.arange(-3.0, n + 4), np.vstack([p, p[:3]]), 3)
-    slope = spline.derivative()
-    g, w = np.polynomial.legendre.leggauss(10)
-    total = np.zeros(6)
-    for k in range(n):
-        t = k + (g + 1) / 2
-        (x, y), (dx, dy) = spline(t).T, slope(t).T
-        total += [w @ (x * dy), w @ (x * x * dy), -w @ (y * y * dx), w @ (x**3 * dy) * 2 / 3,
-                  -w @ (y**3 * dx) * 2 / 3, w @ (x * x * y * dy)]
-    total /= [2, 4, 4, 4, 4, 4]   # the Gauss weights' 1/2 with Green's 1, 1/2, 1/2, 1/3, 1/3, 1/2
-    q = spline(np.linspace(0, n, 200_000, endpoint=False))
-    (x0, y0), (x1, y1) = q.T, np.roll(q, -1, axis=0).T
-    c = x0 * y1 - x1 * y0
-    gon = np.array([c.sum() / 2, ((x0 + x1) * c).sum() / 6, ((y0 + y1) * c).sum() / 6,
-                    ((x0 * x0 + x0 * x1 + x1 * x1) * c).sum() / 12,
-                    ((y0 * y0 + y0 * y1 + y1 * y1) * c).sum() / 12,
-                    ((x0 * y1 + 2 * x0 * y0 + 2 * x1 * y1 + x1 * y0) * c).sum() / 24])
-    assert np.all(np.abs(gon - total) <= 1e-9 * np.abs(total).max())
-    return total
-
-
 @pytest.mark.parametrize("offset", (0.0, 2.0**10))
 def test_bspline_prism_bar_covers_the_error_and_says_something(offset):
     """A prism of a periodic cubic B-spline profile: the side a surface of linear extrusion
@@ -309,7 +278,7 @@ def test_bspline_prism_bar_covers_the_error_and_says_something(offset):
     at = (offset, -offset / 2, offset / 4)
     integral = integrate_solid(cp.bspline_prism(height=height, at=at), 1.0, "prism")
     assert integral.faces == {"extrusion": 1, "plane": 2} and integral.method == "own"
-    a, sx, sy, sxx, syy, sxy = _profile_moments(cp.PROFILE)
+    a, sx, sy, sxx, syy, sxy = cp.profile_moments(cp.PROFILE)
     cx, cy = sx / a, sy / a
     xx, yy, xy = sxx - a * cx * cx, syy - a * cy * cy, sxy - a * cx * cy
     volume = height * a
