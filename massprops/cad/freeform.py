@@ -160,6 +160,7 @@ def _central(raw: RawMoments) -> tuple[Values, tuple[float, np.ndarray, np.ndarr
     local = raw.first / volume          # the COM from ``about``
     com = raw.about + local
     second = raw.second - volume * np.outer(local, local)
+    second = (second + second.T) / 2   # the sums' round-off is not symmetric: the tensor is
     inertia = np.trace(second) * np.eye(3) - second
     dv = raw.volume_err
     dc = (raw.first_err + np.abs(local) * dv) / abs(volume)

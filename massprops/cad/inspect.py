@@ -193,10 +193,10 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
             "open shell integrated as if closed (--allow-open): the volume depends on where "
             "the origin is and is not a property of the part"]
         if solid.closed and solid.sewn is not None:
-            notes.append(f"sewn from {solid.faces} loose faces (the file has no solid around "
-                         f"them) within the file's tolerance, {solid.sewn:.3g} {cad.unit}, "
-                         "into a closed solid oriented outward; the gaps closed are in "
-                         "uncertainty.input")
+            faces = f"{solid.faces} loose face" + ("s" if solid.faces != 1 else "")
+            notes.append(f"sewn from {faces} (the file has no solid around them) within "
+                         f"the file's tolerance, {solid.sewn:.3g} {cad.unit}, into a closed "
+                         "solid oriented outward; the gaps closed are in uncertainty.input")
         if integral.valid is False:
             notes.append("not a valid shape (OpenCASCADE's BRepCheck): the integral and its "
                          "bars describe the surfaces as stored, which may not bound the "
