@@ -191,6 +191,8 @@ def table_face_types():
                                                   drilled_jzz),
              "slanted cylinder (trimmed wall)*": (cp.slanted_cylinder(1.0, 2.0, 0.5), slanted_v,
                                                   slanted_j[2][2]),
+             "NURBS slanted cylinder (trimmed spline)*": (
+                 cp.nurbs(cp.slanted_cylinder(1.0, 2.0, 0.5)), slanted_v, slanted_j[2][2]),
              "offset NURBS sphere (offset)": (offset.Shape(), v_off, 0.4 * v_off * r * r)}
     print(f"{'part':>40} {'method':>17} {'time [ms]':>10} {'V err':>9} {'J err':>9} "
           f"{'bar V':>9} {'bar J':>9}")
@@ -208,7 +210,7 @@ def table_face_types():
               f"{abs(res.moments.volume / v - 1):9.1e} "
               f"{abs(res.moments.inertia[2, 2] / jzz - 1):9.1e} {bv / v:9.1e} "
               f"{bj[2, 2] / jzz:9.1e}")
-    print("  * its wall's parameter curve is a B-spline fitted to 1e-7: the closed form holds "
+    print("  * the wall's parameter curve is a B-spline fitted to 1e-7: the closed form holds "
           "within the input bar, not to round-off")
 
 

@@ -47,7 +47,7 @@ from massprops.tolerances import (
     NURBS_RATIONAL_START,
 )
 
-__all__ = ["RawMoments", "cone_moments", "rectangle", "rectangle_face"]
+__all__ = ["RawMoments", "cone_moments", "rectangle", "rectangle_face", "spline_evaluator"]
 
 
 @dataclass(frozen=True)
@@ -328,11 +328,7 @@ def _block(bu: np.ndarray, dbu: np.ndarray, wu: np.ndarray, bv: np.ndarray, dbv:
     a = np.matmul(bv, along_v)                          # (mu, mv, 4)
     av = np.matmul(dbv, along_v)
     au = np.matmul(bv, (dbu @ flat).reshape(-1, nv, 4))
-    w = a[..., 3:]
-    s = a[..., :3] / w
-    su = (au[..., :3] - au[..., 3:] * s) / w
-    sv = (av[..., :3] - av[..., 3:] * s) / w
-    normal = np.cross(su, sv)
+    s, normal = _point_normal(a, au, av)
     weight = np.outer(wu, wv)
     d = s.reshape(-1, 3) - p
     wr = weight.ravel() * np.sum(d * normal.reshape(-1, 3), axis=1)
@@ -347,3 +343,46 @@ def _block(bu: np.ndarray, dbu: np.ndarray, wu: np.ndarray, bv: np.ndarray, dbv:
     out[15] = wa @ r
     out[16] = wa @ (r * r)
     return out
+
+
+def _point_normal(a: np.ndarray, au: np.ndarray, av: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """(S, S_u x S_v) from the homogeneous point and its two derivatives (..., 4): the
+    quotient rule, S_u = (A_u - w_u S) / w."""
+    w = a[..., 3:]
+    s = a[..., :3] / w
+    su = (au[..., :3] - au[..., 3:] * s) / w
+    sv = (av[..., :3] - av[..., 3:] * s) / w
+    return s, np.cross(su, sv)
+
+
+def spline_evaluator(face: Any):
+    """For a face on a B-spline or Bezier surface: a function (u, v) arrays -> (S (n, 3),
+    S_u x S_v (n, 3)), evaluated from the surface's own poles, weights and knots (location
+    applied; a periodic surface's parameters taken modulo its period), vectorised; else None
+    (the caller evaluates point by point)."""
+    k = _occ()
+    basis = _bare(k, face)
+    if not isinstance(basis, (k.BSpline, k.Bezier)):
+        return None
+    tu, pu, tv, pv, h, _ = _surface_data(face, (0.0, 0.0, 0.0, 0.0))
+    ranges = [(t[p], t[-p - 1], periodic) for t, p, periodic in (
+        (tu, pu, basis.IsUPeriodic()), (tv, pv, basis.IsVPeriodic()))]
+
+    def wrap(x: np.ndarray, lo: float, hi: float, periodic: bool) -> np.ndarray:
+        # a periodic face may sit a period further on; the knots describe [lo, hi] only, and
+        # a point a rounding outside it would evaluate to nothing (the basis is cut there)
+        x = lo + np.mod(x - lo, hi - lo) if periodic else x
+        return np.clip(x, lo, hi)
+
+    def evaluate(u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        u = wrap(np.asarray(u, dtype=float), *ranges[0])
+        v = wrap(np.asarray(v, dtype=float), *ranges[1])
+        bu, dbu = _basis(tu, pu, u)
+        bv, dbv = _basis(tv, pv, v)
+        a = np.einsum("pi,ijk,pj->pk", bu, h, bv)
+        au = np.einsum("pi,ijk,pj->pk", dbu, h, bv)
+        av = np.einsum("pi,ijk,pj->pk", bu, h, dbv)
+        return _point_normal(a, au, av)
+
+    return evaluate

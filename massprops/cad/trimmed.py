@@ -13,9 +13,11 @@ the face's edges are (the face's orientation composed in, so a reversed face com
 negated: its outward normal is -N). Each curve is cut at its own continuity breaks and where
 it crosses a knot line of the surface (G is smooth only between them), and each piece gets
 Gauss-Legendre in its parameter; at each of those points the inner integral in s takes
-Gauss-Legendre on each knot span of the surface between u0 and the point. The surface is
-evaluated by OpenCASCADE (``BRepAdaptor_Surface.D1``: any surface type, the face's location
-applied). Both orders rise together by ``NURBS_ORDER_STEP`` until two orders agree to
+Gauss-Legendre on each knot span of the surface between u0 and the point. A B-spline or
+Bezier surface is evaluated from its own poles, all points at once
+(`massprops.cad.nurbs.spline_evaluator`); any other (offsets, revolutions, analytic surfaces)
+by OpenCASCADE point by point (``BRepAdaptor_Surface.D1``, the face's location applied).
+Both orders rise together by ``NURBS_ORDER_STEP`` until two orders agree to
 ``NURBS_AGREEMENT`` of the face's scale twice in a row; the bar is ``CAD_INTEGRATION_SAFETY``
 x the last difference (ValueError by ``NURBS_MAX_ORDER``: the caller falls back).
 """
@@ -28,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from massprops.cad.nurbs import cone_moments
+from massprops.cad.nurbs import cone_moments, spline_evaluator
 from massprops.tolerances import (
     CAD_INTEGRATION_SAFETY,
     NURBS_AGREEMENT,
@@ -78,9 +80,10 @@ def trimmed_face(face: Any, apex: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     v_breaks = _breaks(surface.NbVIntervals(k.CN), surface.VIntervals)
     pieces = _pieces(face, u_breaks, v_breaks)
     p = np.asarray(apex, dtype=float)
+    evaluate = spline_evaluator(face) or functools.partial(_point_by_point, surface)
     order, previous, agreed = _START_ORDER, None, False
     while True:
-        values, scale = _rule(surface, pieces, u0, u_breaks, order, p)
+        values, scale = _rule(evaluate, pieces, u0, u_breaks, order, p)
         if not np.all(np.isfinite(values)):
             raise ValueError("the surface does not evaluate on the face")
         if previous is not None:
@@ -153,15 +156,29 @@ def _gauss(n: int) -> tuple[np.ndarray, np.ndarray]:
     return np.polynomial.legendre.leggauss(n)
 
 
-def _rule(surface: Any, pieces: list, u0: float, u_breaks: np.ndarray, n: int, apex: np.ndarray
-          ) -> tuple[np.ndarray, np.ndarray]:
+def _point_by_point(surface: Any, u: np.ndarray, v: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """(S, S_u x S_v) at each (u, v) by OpenCASCADE (any surface type: offsets, revolutions,
+    analytic surfaces), one call per point."""
+    k = _occ()
+    pnt, du, dv = k.gp_Pnt(), k.gp_Vec(), k.gp_Vec()
+    pts, nrm = np.empty((len(u), 3)), np.empty((len(u), 3))
+    for i, (ui, vi) in enumerate(zip(u, v)):
+        surface.D1(float(ui), float(vi), pnt, du, dv)
+        pts[i] = pnt.Coord()
+        nrm[i] = np.cross(du.Coord(), dv.Coord())
+    return pts, nrm
+
+
+def _rule(evaluate: Any, pieces: list, u0: float, u_breaks: np.ndarray, n: int,
+          apex: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """[V, ∫d, ∫d dᵀ, area] with n points per boundary piece and per inner span, and the
-    scale of each of the 13 (Σ |w d·N| r^k / 3, r = |d|) that agreement is judged against."""
+    scale of each of the 13 (Σ |w d·N| r^k / 3, r = |d|) that agreement is judged against.
+    evaluate: (u, v) arrays -> (S, S_u x S_v)."""
     k = _occ()
     x, w = _gauss(n)
     pnt2, tan2 = k.gp_Pnt2d(), k.gp_Vec2d()
-    pnt, du, dv = k.gp_Pnt(), k.gp_Vec(), k.gp_Vec()
-    sums = np.zeros(17)
+    us, vs, ws = [], [], []   # every inner point of every outer point, with its weight
     for curve, t0, t1 in pieces:
         half = (t1 - t0) / 2
         for t, wt in zip((t0 + t1) / 2 + half * x, half * w):
@@ -170,24 +187,26 @@ def _rule(surface: Any, pieces: list, u0: float, u_breaks: np.ndarray, n: int, a
             dvdt = tan2.Y()
             if dvdt == 0:   # along u: contributes nothing (∮ G dv)
                 continue
-            cuts = np.concatenate(([u0], u_breaks[(u_breaks > min(u0, u)) &
-                                                  (u_breaks < max(u0, u))], [u]))
-            if u < u0:
-                cuts = np.concatenate(([u0], np.sort(cuts[1:-1])[::-1], [u]))
+            inside = u_breaks[(u_breaks > min(u0, u)) & (u_breaks < max(u0, u))]
+            cuts = np.concatenate(([u0], np.sort(inside)[::1 if u >= u0 else -1], [u]))
             lo, hi = cuts[:-1, None], cuts[1:, None]
             s = ((lo + hi) / 2 + (hi - lo) / 2 * x).ravel()
-            ws = ((hi - lo) / 2 * w).ravel() * (wt * dvdt)
-            pts, nrm = np.empty((len(s), 3)), np.empty((len(s), 3))
-            for i, si in enumerate(s):
-                surface.D1(float(si), v, pnt, du, dv)
-                pts[i] = pnt.Coord()
-                nrm[i] = np.cross(du.Coord(), dv.Coord())
+            us.append(s)
+            vs.append(np.full(len(s), v))
+            ws.append(((hi - lo) / 2 * w).ravel() * (wt * dvdt))
+    sums = np.zeros(17)
+    if us:
+        u_all, v_all, w_all = map(np.concatenate, (us, vs, ws))
+        for start in range(0, len(u_all), _BLOCK):
+            block = slice(start, start + _BLOCK)
+            pts, nrm = evaluate(u_all[block], v_all[block])
+            ws_ = w_all[block]
             d = pts - apex
-            flux = ws * np.einsum("ij,ij->i", d, nrm)
+            flux = ws_ * np.einsum("ij,ij->i", d, nrm)
             sums[0] += flux.sum()
             sums[1:4] += flux @ d
             sums[4:13] += ((d * flux[:, None]).T @ d).ravel()
-            sums[13] += ws @ np.linalg.norm(nrm, axis=1)   # signed, as the flux: the area
+            sums[13] += ws_ @ np.linalg.norm(nrm, axis=1)   # signed, as the flux: the area
             r = np.linalg.norm(d, axis=1)
             sums[14] += np.abs(flux).sum()
             sums[15] += np.abs(flux) @ r
@@ -200,3 +219,7 @@ def _rule(surface: Any, pieces: list, u0: float, u_breaks: np.ndarray, n: int, a
     scale[1:4] = sums[15] / 3
     scale[4:13] = sums[16] / 3
     return values, scale
+
+
+_BLOCK = 8192
+"""Points evaluated at once (the spline evaluator's dense basis matrices stay a few MB)."""
