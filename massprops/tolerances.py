@@ -120,8 +120,9 @@ QUATERNION_NORM_ATOL = 0.5
 round-off of 1, so only a diverged state gets there."""
 
 CAD_ADAPTIVE_EPS = (1e-12, 1e-14)
-"""Free-form (NURBS) CAD faces: the nested relative tolerances given to OpenCASCADE's adaptive
-integration. Its own error estimate cannot be trusted (it reports 2e-16 where the result is 1e-9
+"""CAD solids on which one of our own rules does not settle (the fallback: every face is ours
+otherwise): the nested relative tolerances given to OpenCASCADE's adaptive integration of the
+whole solid. Its own error estimate cannot be trusted (it reports 2e-16 where the result is 1e-9
 off), but its results at tolerances two decades apart converge geometrically (measured on NURBS
 spheres, tori, cylinders, cones: each step ~14x closer), so the last difference bounds the
 last result's error with a margin of ~15x. 1e-14 is the finest level that still moves: below it
