@@ -4,7 +4,9 @@ STEP and IGES go through OpenCASCADE's XCAF readers (product names, assembly str
 colours); BREP files hold one shape and no unit (``unit`` says it, default metres). The geometry
 is kept in the FILE's unit (the translator's conversion to millimetres is switched off while
 reading): scaling far-away coordinates before integrating would round them (1e-8 at 1e8 sizes);
-the integral converts its results instead.
+the integral converts its results instead. Faces and shells that belong to no solid (IGES
+written in face mode) are sewn into closed solids where they close (`massprops.cad.sew`), at
+least at the file's own precision (IGES: its resolution and its ten printed digits).
 """
 
 from __future__ import annotations
