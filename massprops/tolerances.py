@@ -129,8 +129,9 @@ QUATERNION_NORM_ATOL = 0.5
 round-off of 1, so only a diverged state gets there."""
 
 CAD_ADAPTIVE_EPS = (1e-12, 1e-14)
-"""Free-form (NURBS) CAD faces: the nested relative tolerances given to OpenCASCADE's adaptive
-integration. Its own error estimate cannot be trusted (it reports 2e-16 where the result is 1e-9
+"""CAD solids on which one of our own rules does not settle (the fallback: every face is ours
+otherwise): the nested relative tolerances given to OpenCASCADE's adaptive integration of the
+whole solid. Its own error estimate cannot be trusted (it reports 2e-16 where the result is 1e-9
 off), but its results at tolerances two decades apart converge geometrically (measured on NURBS
 spheres, tori, cylinders, cones: each step ~14x closer), so the last difference bounds the
 last result's error with a margin of ~15x. 1e-14 is the finest level that still moves: below it
@@ -143,6 +144,13 @@ proves nothing: the level this much coarser is run too, and its difference makes
 CAD_INTEGRATION_SAFETY = 2.0
 """The integration bar is this multiple of the difference between the last two adaptive levels
 (the geometric convergence above leaves a true error ~1/15 of it; 2 covers a slower step)."""
+
+CAD_FLAT_RTOL = 1e-14
+"""A B-spline or Bezier face whose poles lie within this fraction of their extent from one plane
+is integrated as that plane (Green's theorem along its edges, `massprops.cad.planar`), the
+poles' distance added to its bar (δ x area on the volume): NURBS conversions of planes keep
+their poles coplanar to round-off (~1e-16), so this takes them and leaves any curved face,
+whose bar would otherwise grow past 1e-14."""
 
 CAD_ROUNDING_ULPS = 64.0
 """OpenCASCADE's integral offers no rounding bound: the bar charges this many units of

@@ -280,3 +280,36 @@ def test_total_mass_sets_one_uniform_density(assembly):
     assert result.total[0].mass == pytest.approx(2.0, rel=1e-14)
     with pytest.raises(UsageError):
         inspect_cad(assembly, mass=2.0, density_map=[("pin", 1.0)])
+
+
+@pytest.mark.parametrize("kind", ("box", "cylinder", "torus"))
+def test_align_far_part_in_millimetres_lands_on_the_origin(kind, tmp_path):
+    """A 10 mm part, tilted, 1e6 sizes away in a millimetre STEP file: aligned, the written
+    file's COM is at the origin within the bars. One float for that COM is rounded to half an
+    ulp of 1.5e7 mm (8e-11 of the part); the geometry is moved by the local origin first (exact
+    near it), then by the COM from it, then rotated. BREP keeps every digit: round-off only;
+    STEP prints ~12 digits, and its re-read part is within its own bars."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf
+
+    from massprops.cad.write import align_cad
+
+    trsf = gp_Trsf()
+    trsf.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(1, 2, 3)), 0.7)
+    shape = BRepBuilderAPI_Transform(cp.make(kind, 10.0), trsf, True).Shape()
+    cp.write_step(cp.moved(shape, (1.3e7, -0.7e7, 0.4e7)), tmp_path / "far.step", "MM")
+    before = inspect_cad(tmp_path / "far.step")
+    for name in ("aligned.brep", "aligned.step"):
+        align_cad(before, tmp_path / name)
+        after = inspect_cad(tmp_path / name, unit="mm" if name.endswith("brep") else None
+                            ).solids[0]
+        size = after.properties.volume ** (1 / 3)
+        com = np.abs(after.properties.center_of_mass)
+        bars = [after.properties.uncertainty.rounding, after.integration]
+        computed = sum(b.center_of_mass for b in bars if b is not None)
+        if name.endswith("brep"):
+            assert np.all(com <= computed) and com.max() <= 1e-13 * size
+        else:
+            assert np.all(com <= computed + after.input.center_of_mass)
+        assert after.properties.mass == pytest.approx(before.solids[0].properties.mass,
+                                                      rel=1e-12)

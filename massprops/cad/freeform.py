@@ -1,15 +1,16 @@
-"""A solid with free-form faces: our own rule where a face's domain is a parameter rectangle,
-OpenCASCADE's adaptive rule on the rest, each with its error bar.
+"""A solid with free-form faces (or analytic faces the fixed rule is not exact on): every face
+by one of our own rules, each with its error bar; OpenCASCADE's adaptive rule only when one of
+ours does not settle.
 
-Faces found by `massprops.cad.nurbs.rectangle` are integrated there (to round-off, bar from
-two orders of Gauss-Legendre per knot span). The other faces (trimmed free-form, analytic) go to
-``BRepGProp`` together, as one open compound: analytic-only, by its fixed Gauss rule (exact);
-else by its adaptive rule at the nested tolerances ``CAD_ADAPTIVE_EPS`` (bar from their
-difference, as before). Each face's share is the cone from OpenCASCADE's apex (the mean of
-the compound's vertices) in both parts, so the parts add up. OpenCASCADE returns volume, centre
-and inertia about the centre, from which the raw moments about the origin are recovered; when
-its part encloses almost no volume (below ``1e-3`` of the box's), that recovery would divide by
-~0, and the whole solid goes to the adaptive rule instead.
+Ours: faces found by `massprops.cad.nurbs.rectangle` (B-spline, Bezier, revolution and
+extrusion faces whose domain is their parameter rectangle: tensor-product Gauss-Legendre per
+knot span), planes and flat splines (`massprops.cad.planar`: Green's theorem along their
+edges), and every other face (`massprops.cad.trimmed`: Green's theorem in its parameters, the
+inner integral per knot span); each with a bar from two orders. Each face's share is the cone
+from one apex (the bounding box's centre) over it: over a closed surface the cones add up to
+the solid. When a rule does not settle (``NURBS_MAX_ORDER``) or a surface does not evaluate,
+the whole solid goes to OpenCASCADE's adaptive rule at the nested tolerances
+``CAD_ADAPTIVE_EPS``, with a bar from their difference (its own estimate is never the bar).
 """
 
 from __future__ import annotations
@@ -20,8 +21,13 @@ from typing import Any
 
 import numpy as np
 
-from massprops.cad.faces import ANALYTIC_FACES, face_census, is_analytic, occ_area
-from massprops.cad.nurbs import RawMoments, integrate_rectangles, rectangle
+from massprops.cad.faces import (
+    is_analytic,
+    occ_area,
+)
+from massprops.cad.nurbs import RawMoments, rectangle, rectangle_face
+from massprops.cad.planar import plane_face, plane_frame
+from massprops.cad.trimmed import trimmed_face
 from massprops.mesh.facesums import U
 from massprops.tolerances import (
     CAD_ADAPTIVE_EPS,
@@ -37,110 +43,61 @@ Values = tuple[float, np.ndarray, np.ndarray]   # volume, COM, inertia about the
 @functools.cache
 def _occ() -> SimpleNamespace:
     """OpenCASCADE names used here (optional extra, imported once with the first CAD file)."""
-    from OCP.BRep import BRep_Builder, BRep_Tool
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
     from OCP.BRepGProp import BRepGProp
-    from OCP.gp import gp_Pnt
     from OCP.GProp import GProp_GProps
-    from OCP.TopAbs import TopAbs_FACE, TopAbs_VERTEX
+    from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS, TopoDS_Compound
+    from OCP.TopoDS import TopoDS
 
-    return SimpleNamespace(Builder=BRep_Builder, BRep_Tool=BRep_Tool, BRepGProp=BRepGProp,
-                           GProp_GProps=GProp_GProps, FACE=TopAbs_FACE, VERTEX=TopAbs_VERTEX,
-                           Explorer=TopExp_Explorer, TopoDS=TopoDS, Compound=TopoDS_Compound,
-                           MakeVertex=BRepBuilderAPI_MakeVertex, gp_Pnt=gp_Pnt)
+    return SimpleNamespace(BRepGProp=BRepGProp, GProp_GProps=GProp_GProps, FACE=TopAbs_FACE,
+                           Explorer=TopExp_Explorer, TopoDS=TopoDS)
 
 
-def integrate_free_form(local: Any, only_closed: bool, box_volume: float,
-                        centre: tuple[float, float, float]
+def integrate_free_form(local: Any, only_closed: bool, centre: tuple[float, float, float]
                         ) -> tuple[Values, tuple[float, np.ndarray, np.ndarray], str, float]:
     """((volume, COM, inertia about the COM), (their integration bars), method, the area of
-    the free-form faces) of a solid with free-form faces about its own origin, file unit;
-    centre: its bounding box's. method: "own" (every face by our rule), "mixed", or
-    "adaptive" (all by OpenCASCADE's)."""
+    the free-form faces) of a solid about its own origin, file unit; centre: its bounding
+    box's. method: "own" (every face by our rules) or "adaptive" (all by OpenCASCADE's)."""
     k = _occ()
-    rects, rest = [], []
+    faces = []   # (face, its rectangle or None, its plane's frame or None)
     explorer = k.Explorer(local, k.FACE)
     while explorer.More():
         face = k.TopoDS.Face(explorer.Current())
-        box = rectangle(face)
-        if box is None:
-            rest.append(face)
-        else:
-            rects.append((face, box))
+        frame = plane_frame(face)
+        faces.append((face, rectangle(face) if frame is None else None, frame))
         explorer.Next()
-    free_rest = [face for face in rest if not is_analytic(face)]
-    everything = [face for face, _ in rects] + free_rest
-    if not rects:
-        return (*_adaptive(local, only_closed), occ_area(everything))
     try:
-        if not rest:
-            raw = integrate_rectangles(rects)
-            return (*_central(raw), "own", raw.area)
-        raw = _mixed(rects, rest, box_volume, centre)
-    except ValueError:   # a surface our rule does not take or settle on: all to OpenCASCADE
-        return (*_adaptive(local, only_closed), occ_area(everything))
-    if raw is None or not _agrees(local, only_closed, raw.volume, box_volume):
-        return (*_adaptive(local, only_closed), occ_area(everything))
-    return (*_central(raw), "mixed", raw.area + occ_area(free_rest))
+        # about the box's centre: the bars, first order in the moments about that point,
+        # grow with the COM's distance from it (a cylinder about its base: 1.6e-13 in
+        # inertia, for an error of 1.5e-15)
+        raw = _own(faces, np.asarray(centre, dtype=float))
+    except ValueError:   # a surface our rules do not settle on: all to OpenCASCADE
+        free = [face for face, _, _ in faces if not is_analytic(face)]
+        return (*_adaptive(local, only_closed), occ_area(free))
+    return (*_central(raw), "own", raw.area)
 
 
-def _agrees(local: Any, only_closed: bool, volume: float, box_volume: float) -> bool:
-    """The mixed sum against OpenCASCADE's coarse adaptive volume (~2e-7 off on NURBS forms):
-    the two parts add up only if OpenCASCADE's cones start where ours do (its apex, the mean
-    of the vertices, is not a documented contract); a mismatch moves the volume by a sizeable
-    fraction, which this catches."""
-    k = _occ()
-    props = k.GProp_GProps()
-    k.BRepGProp.VolumeProperties_s(local, props, 1e-9, only_closed)
-    return abs(props.Mass() - volume) <= 1e-5 * box_volume
-
-
-def _mixed(rects: list, rest: list, box_volume: float, centre: tuple[float, float, float]
-           ) -> RawMoments | None:
-    """Our faces and OpenCASCADE's added up as raw moments; None when OpenCASCADE's part
-    holds too little volume to recover its moments from."""
-    k = _occ()
-    compound = k.Compound()
-    builder = k.Builder()
-    builder.MakeCompound(compound)
-    for face in rest:
-        builder.Add(compound, face)
-    # one free vertex more puts OpenCASCADE's apex at the box's centre: left at the faces' own
-    # vertices, it lies in a lone planar face's plane, whose cone then holds no volume to
-    # recover the moments from
-    count, total = _vertex_sum(compound)
-    builder.Add(compound, k.MakeVertex(k.gp_Pnt(*((count + 1) * np.asarray(centre) - total))
-                                       ).Vertex())
-    count, total = _vertex_sum(compound)
-    raw = integrate_rectangles(rects, total / count)
-    analytic = all(kind in ANALYTIC_FACES for kind in face_census(compound)[0])
-    levels = occ_levels(compound, False, analytic)
-    if abs(levels[-1][0]) < 1e-3 * box_volume:
-        return None
-    raws = [_raw(values) for values in levels]
-    last = raws[-1]
-    bar = (np.zeros(13) if analytic else
-           CAD_INTEGRATION_SAFETY * np.abs(last - raws[-2]) + 4 * U * np.abs(last))
-    return RawMoments(raw.volume + last[0], raw.first + last[1:4],
-                      raw.second + last[4:].reshape(3, 3), raw.volume_err + bar[0],
-                      raw.first_err + bar[1:4], raw.second_err + bar[4:].reshape(3, 3),
-                      raw.area)
-
-
-def _vertex_sum(shape: Any) -> tuple[int, np.ndarray]:
-    """(count, sum) of the shape's vertices, each counted as often as the explorer meets it:
-    their mean is the apex of OpenCASCADE's per-face cones (its ``roughBaryCenter``)."""
-    k = _occ()
-    explorer = k.Explorer(shape, k.VERTEX)
-    total, count = np.zeros(3), 0
-    while explorer.More():
-        p = k.BRep_Tool.Pnt_s(k.TopoDS.Vertex(explorer.Current()))
-        total += (p.X(), p.Y(), p.Z())
-        count += 1
-        explorer.Next()
-    return count, total
+def _own(faces: list, apex: np.ndarray) -> RawMoments:
+    """The raw moments about ``apex`` of the faces (face, its rectangle or None, its plane's
+    frame from `plane_frame` or None), each face's share the cone from the apex, summed with
+    their bars; ValueError when a rule does not settle. area: the free-form faces' only (the
+    census bounds the analytic ones' already)."""
+    total = np.zeros(14)
+    err = np.zeros(13)
+    for face, box, frame in faces:
+        if box is not None:
+            values, bar = rectangle_face(face, box, apex)
+        elif frame is not None:
+            values, bar = plane_face(face, apex, frame)
+        else:
+            values, bar = trimmed_face(face, apex)
+        if is_analytic(face):
+            values[13] = 0.0
+        total += values
+        err += bar
+    return RawMoments(float(total[0]), total[1:4], total[4:13].reshape(3, 3), float(err[0]),
+                      err[1:4], err[4:13].reshape(3, 3), float(total[13]),
+                      np.asarray(apex, dtype=float))
 
 
 def occ_levels(shape: Any, only_closed: bool, analytic: bool) -> list[Values]:
@@ -196,25 +153,21 @@ def values(props: Any) -> Values:
     return props.Mass(), np.array([c.X(), c.Y(), c.Z()]), j
 
 
-def _raw(v: Values) -> np.ndarray:
-    """[V, ∫x (3), ∫x xᵀ (9)] about the origin from (volume, COM, inertia about the COM)."""
-    volume, com, inertia = v
-    second = np.trace(inertia) / 2 * np.eye(3) - inertia + volume * np.outer(com, com)
-    return np.concatenate(([volume], volume * com, second.ravel()))
-
-
 def _central(raw: RawMoments) -> tuple[Values, tuple[float, np.ndarray, np.ndarray]]:
     """Raw moments and their bars to (volume, COM, inertia about the COM) and first-order
     bars of those."""
     volume = raw.volume
-    com = raw.first / volume
-    second = raw.second - volume * np.outer(com, com)
+    local = raw.first / volume          # the COM from ``about``
+    com = raw.about + local
+    second = raw.second - volume * np.outer(local, local)
+    second = (second + second.T) / 2   # the sums' round-off is not symmetric: the tensor is
     inertia = np.trace(second) * np.eye(3) - second
     dv = raw.volume_err
-    dc = (raw.first_err + np.abs(com) * dv) / abs(volume)
-    ac = np.abs(com)
+    dc = (raw.first_err + np.abs(local) * dv) / abs(volume)
+    ac = np.abs(local)
     d_outer = abs(volume) * (np.outer(ac, dc) + np.outer(dc, ac)) + np.outer(ac, ac) * dv
     d_second = raw.second_err + d_outer
     d_inertia = np.trace(d_second) * np.eye(3) + d_second
     return ((volume, com, inertia),
-            (dv + 4 * U * abs(volume), dc + 4 * U * ac, d_inertia + 4 * U * np.abs(inertia)))
+            (dv + 4 * U * abs(volume), dc + 4 * U * np.abs(com),
+             d_inertia + 4 * U * np.abs(inertia)))

@@ -30,7 +30,8 @@ __all__ = ["CadInspection", "SolidResult", "inspect_cad", "load_density_map"]
 class SolidResult:
     """One solid: its name, assembly path, placement (4, 4; translation in m), the integral
     (unit density, SI), the mass properties at its density (file frame, about its COM),
-    the integration and input bars at that density (None where not applicable), warnings."""
+    the integration and input bars at that density (None where not applicable), warnings;
+    density_source: where its density came from (see `material`)."""
 
     solid: CadSolid
     placement: np.ndarray
@@ -40,6 +41,15 @@ class SolidResult:
     input: Uncertainty | None
     warnings: tuple[str, ...]
     repairs: dict | None = None
+    density_source: str = "default"
+
+    def material(self) -> dict:
+        """{"name" (the file's material, else None), "density" (kg/m³, the one used),
+        "source"}: source is "file" (the material's density in the file), "--density-map",
+        "--density", "--mass" (the total mass's uniform density) or "default" (1 kg/m³)."""
+        stated = self.solid.material or {}
+        return {"name": stated.get("name"), "density": self.properties.density,
+                "source": self.density_source}
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,6 +69,7 @@ class CadInspection:
         for r in self.solids:
             d = {"file": f.name, "solid": r.solid.name, "path": r.solid.path}
             d.update(r.properties.as_dict())
+            d["material"] = r.material()
             d["uncertainty"] = _bars(r.properties, r.integration, r.input)
             cad = {"format": f.format, "unit": f.unit, "faces": dict(r.integral.faces),
                    "tolerance": r.integral.tolerance}
@@ -126,7 +137,8 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
                 allow_open: bool = False, shell: float | None = None) -> CadInspection:
     """Read a CAD file and integrate every solid (see `massprops.cad.integrate`).
 
-    density : kg/m³ for solids the map does not name (default 1). mass : kg, the TOTAL mass;
+    density : kg/m³ for solids the map does not name (default: the density of the material the
+    file assigns the solid, else 1; `SolidResult.material` says which). mass : kg, the TOTAL mass;
     the density (uniform) follows from the total volume; not with a density or a map.
     unit : BREP's unit (default m); for STEP/IGES only the file's own (else UsageError).
     shell : a wall thickness in metres: every face, open or closed, is the mid-surface of a
@@ -153,17 +165,23 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
             shells.append((bar, record))
             continue
         if not solid.closed and not allow_open:
+            sewn = "" if solid.sewn is None else (
+                f" (its loose faces do not close when sewn within the file's tolerance, "
+                f"{solid.sewn:.3g} {cad.unit})")
             raise MeshTopologyError(
-                f"{cad.name}: {solid.path} is an open shell, not a closed solid: its volume "
-                f"is undefined; close it in the CAD tool, or pass {setting_ref('allow_open')}")
+                f"{cad.name}: {solid.path} is an open shell, not a closed solid{sewn}: its "
+                f"volume is undefined; close it in the CAD tool, or pass "
+                f"{setting_ref('allow_open')}")
         integrals.append(integrate_solid(solid.shape, cad.scale, f"{cad.name}: {solid.path}",
                                          only_closed=solid.closed))
-    densities, warnings = _densities(cad, density_map or [], density)
+    densities, sources, warnings = _densities(cad, density_map or [], density)
     if mass is not None:
         total_volume = sum(i.moments.volume for i in integrals)
         densities = [mass / total_volume] * len(integrals)
+        sources = ["--mass"] * len(integrals)
     results = []
-    for k, (solid, integral, rho) in enumerate(zip(cad.solids, integrals, densities)):
+    for k, (solid, integral, rho, source) in enumerate(zip(cad.solids, integrals, densities,
+                                                            sources)):
         props = properties_from_moments(integral.origin, integral.moments, density=rho,
                                         mass=None, name=f"{cad.name}: {solid.name}")
         repairs = None
@@ -174,6 +192,11 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
         notes = [] if solid.closed or shells else [
             "open shell integrated as if closed (--allow-open): the volume depends on where "
             "the origin is and is not a property of the part"]
+        if solid.closed and solid.sewn is not None:
+            faces = f"{solid.faces} loose face" + ("s" if solid.faces != 1 else "")
+            notes.append(f"sewn from {faces} (the file has no solid around them) within "
+                         f"the file's tolerance, {solid.sewn:.3g} {cad.unit}, into a closed "
+                         "solid oriented outward; the gaps closed are in uncertainty.input")
         if integral.valid is False:
             notes.append("not a valid shape (OpenCASCADE's BRepCheck): the integral and its "
                          "bars describe the surfaces as stored, which may not bound the "
@@ -182,27 +205,38 @@ def inspect_cad(path: str | os.PathLike, *, density: float | None = None,
         placement[:3, 3] *= cad.scale
         results.append(SolidResult(solid, placement, integral, props,
                                    _integration(integral, props),
-                                   _input(integral, props, cad), tuple(notes), repairs))
+                                   _input(integral, props, cad,
+                                          solid.sewn if solid.closed else None), tuple(notes),
+                                   repairs, source))
     total = _total(results) if len(results) > 1 else None
     return CadInspection(cad, tuple(results), total, tuple(warnings))
 
 
 def _densities(cad: CadFile, density_map: list[tuple[str, float]], default: float | None
-               ) -> tuple[list[float], list[str]]:
-    """Per solid: the first pattern in map order matching its name or path, else ``default``."""
+               ) -> tuple[list[float], list[str], list[str]]:
+    """Per solid, the density and where it came from: the first pattern in map order matching
+    its name or path; else ``default`` (--density) when given; else the density of the material
+    the file assigns it; else 1 kg/m³."""
     used = [False] * len(density_map)
-    out = []
+    out, sources = [], []
     for solid in cad.solids:
-        rho = 1.0 if default is None else default
+        stated = (solid.material or {}).get("density")
+        if default is not None:
+            rho, source = default, "--density"
+        elif stated is not None:
+            rho, source = float(stated), "file"
+        else:
+            rho, source = 1.0, "default"
         for k, (pattern, value) in enumerate(density_map):
             if any(fnmatch.fnmatchcase(s, pattern) for s in (solid.name, solid.path)):
-                rho, used[k] = value, True
+                rho, source, used[k] = value, "--density-map", True
                 break
         out.append(rho)
+        sources.append(source)
     warnings = [f"--density-map: pattern {p!r} matches no solid (names: "
                 f"{', '.join(s.name for s in cad.solids)})"
                 for (p, _), hit in zip(density_map, used) if not hit]
-    return out, warnings
+    return out, sources, warnings
 
 
 def _integration(integral: SolidIntegral, props: MassProperties) -> Uncertainty | None:
@@ -214,10 +248,12 @@ def _integration(integral: SolidIntegral, props: MassProperties) -> Uncertainty 
     return Uncertainty(dv, rho * dv, dc, dj, np.full(3, np.linalg.norm(dj, 2)))
 
 
-def _input(integral: SolidIntegral, props: MassProperties, cad: CadFile) -> Uncertainty | None:
+def _input(integral: SolidIntegral, props: MassProperties, cad: CadFile,
+           sewn: float | None = None) -> Uncertainty | None:
     """First order: every surface point may lie anywhere within the modelling tolerance τ
-    (plus 2 ulps of the largest coordinate, plus half the last printed digit for IGES), so ∫g dV
-    moves by at most max|g| τ A
+    (plus 2 ulps of the largest coordinate, plus half the last printed digit for IGES, plus
+    the tolerance ``sewn`` (file unit) its loose faces were sewn at: a gap that wide, closed
+    anywhere, moves the boundary that far), so ∫g dV moves by at most max|g| τ A
     (the mesh ``input`` bar's argument with η = τ in every direction)."""
     far = float(np.max(np.abs(integral.origin) + integral.reach))
     # float64 itself: far from the origin every stored point and pole is rounded to half an
@@ -226,6 +262,8 @@ def _input(integral: SolidIntegral, props: MassProperties, cad: CadFile) -> Unce
     tau = integral.tolerance + 2 * float(np.spacing(far))
     if cad.digits is not None:
         tau += far * 0.5 * 10.0 ** (1 - cad.digits)
+    if sewn is not None:
+        tau += sewn * cad.scale
     if tau == 0:
         return None
     flux = 1.01 * tau * integral.area

@@ -7,12 +7,15 @@ offset costs nothing (about the world origin a cylinder 1e7 sizes away comes out
 The results are moved back in float64 (COM = origin + local COM; the inertia is already about
 the COM) and converted to SI only now: scaling far-away coordinates first would round them.
 
-Faces that are all analytic (plane, cylinder, cone, sphere, torus) are integrated by the fixed
-Gauss rules, exact to round-off: ``integration`` is None. With any free-form face (B-spline,
-Bezier, revolution, extrusion, offset, other), see `massprops.cad.freeform`: B-spline and
-Bezier faces whose domain is their parameter rectangle by our own Gauss-Legendre rule per knot
-span (to round-off), the rest by OpenCASCADE's adaptive rule at nested tolerances, each with a
-bar from two levels (OpenCASCADE's own estimate is not trusted).
+Faces that are all analytic (plane, cylinder, cone, sphere, torus), with edges that are all
+lines and conics and curved faces bounded by their parameter lines
+(`massprops.cad.faces.fixed_rule_exact`), are integrated by the fixed Gauss rules, exact to
+round-off: ``integration`` is None. Otherwise see `massprops.cad.freeform`: B-spline, Bezier,
+revolution and extrusion faces whose domain is their parameter rectangle by our own
+Gauss-Legendre rule per knot span, planes (and flat splines) by ours along their edges
+(Green's theorem), each to round-off with a bar from two orders; the rest by OpenCASCADE's
+adaptive rule at nested tolerances, with a bar from two levels (OpenCASCADE's own estimate is
+never the bar).
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from massprops.cad.faces import ANALYTIC_FACES, face_census
+from massprops.cad.faces import ANALYTIC_FACES, face_census, fixed_rule_exact
 from massprops.cad.freeform import integrate_free_form, occ_levels
 from massprops.errors import DegenerateMeshError
 from massprops.mesh.facesums import U
@@ -44,7 +47,10 @@ class SolidIntegral:
     m, the bounding box's half extents. faces : {type: count}. valid : OpenCASCADE's BRepCheck
     verdict for solids with free-form faces (None: not checked; for analytic solids the check
     would cost more than the integral). An invalid shape (seen: a torus converted to NURBS 1e11
-    sizes from the origin) can integrate to anything, and the nested levels may agree on it."""
+    sizes from the origin) can integrate to anything, and the nested levels may agree on it.
+    anchor : (3,) the local origin in the FILE unit, as the float the geometry was shifted by
+    (``origin`` is that times the scale, rounded: a far part's COM is exact only as anchor +
+    local COM, which `massprops.cad.write` moves by in two steps)."""
 
     origin: np.ndarray
     moments: UnitMoments
@@ -55,6 +61,7 @@ class SolidIntegral:
     faces: dict[str, int]
     valid: bool | None = None
     method: str = "gauss"
+    anchor: np.ndarray | None = None
 
 
 def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = True
@@ -67,7 +74,9 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
 
     faces, area, free = face_census(local, free_area=False)
     tolerance = float(k.ShapeTolerance().Tolerance(local, 1, k.SHAPE))  # 1: the largest
-    free_form = bool(free)
+    # analytic faces with a free-form edge, or curved ones trimmed off their parameter lines,
+    # are not exact by the fixed rule either
+    free_form = bool(free) or not fixed_rule_exact(local, faces)
 
     n = sum(faces.values())
     box_volume = 8 * half[0] * half[1] * half[2]
@@ -76,8 +85,7 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
         volume, com, inertia = occ_levels(local, only_closed, True)[0]
     else:
         (volume, com, inertia), integration, method, free_area = integrate_free_form(
-            local, only_closed, box_volume,
-            centre if not origin.any() else (0.0, 0.0, 0.0))
+            local, only_closed, centre if not origin.any() else (0.0, 0.0, 0.0))
         area += free_area
 
     ulps = CAD_ROUNDING_ULPS * max(n, 1) * U
@@ -100,7 +108,7 @@ def integrate_solid(shape: Any, scale: float, name: str, *, only_closed: bool = 
     if integration is not None:
         integration = (integration[0] * s**3, integration[1] * s, integration[2] * s**5)
     return SolidIntegral(origin * s, moments, integration, tolerance * s, area * s * s,
-                         reach * s, faces, valid, method)
+                         reach * s, faces, valid, method, origin)
 
 
 def localise(shape: Any) -> tuple[Any, np.ndarray, tuple, tuple]:

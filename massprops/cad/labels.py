@@ -7,7 +7,8 @@ type (``COMPOUND``, ``SOLID``): those are not the file's names, so `iges_name` a
 itself and falls back on its label, else on nothing (the caller numbers it).
 Materials: STEP's material designation with its density (OpenCASCADE keeps that density in
 g/cm³, the unit its translator writes: gram per cubic centimetre), reported in kg/m³; else a
-visual material's name. Reported only: the density used is ``--density``/``--density-map``.
+visual material's name. The solid takes that density unless ``--density`` or ``--density-map``
+says otherwise (`massprops.cad.inspect`).
 """
 
 from __future__ import annotations

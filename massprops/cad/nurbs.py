@@ -47,13 +47,13 @@ from massprops.tolerances import (
     NURBS_RATIONAL_START,
 )
 
-__all__ = ["RawMoments", "integrate_rectangles", "rectangle"]
+__all__ = ["RawMoments", "cone_moments", "rectangle", "rectangle_face", "spline_evaluator"]
 
 
 @dataclass(frozen=True)
 class RawMoments:
-    """∫dV, ∫x dV (3,), ∫x xᵀ dV (3, 3) about the shape's own origin (file unit), each with
-    a bound of the quadrature's remaining error; area: ∫dA of the faces."""
+    """∫dV, ∫d dV (3,), ∫d dᵀ dV (3, 3), d = x - about, about the point ``about`` (file unit),
+    each with a bound of the quadrature's remaining error; area: ∫dA of the faces."""
 
     volume: float
     first: np.ndarray
@@ -62,6 +62,7 @@ class RawMoments:
     first_err: np.ndarray
     second_err: np.ndarray
     area: float
+    about: np.ndarray
 
 
 @functools.cache
@@ -70,7 +71,21 @@ def _occ() -> SimpleNamespace:
     from OCP.BRep import BRep_Tool
     from OCP.BRepAdaptor import BRepAdaptor_Curve2d
     from OCP.BRepTools import BRepTools
-    from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface, Geom_RectangularTrimmedSurface
+    from OCP.Geom import (
+        Geom_BezierCurve,
+        Geom_BezierSurface,
+        Geom_BSplineCurve,
+        Geom_BSplineSurface,
+        Geom_Circle,
+        Geom_Ellipse,
+        Geom_Hyperbola,
+        Geom_Line,
+        Geom_Parabola,
+        Geom_RectangularTrimmedSurface,
+        Geom_SurfaceOfLinearExtrusion,
+        Geom_SurfaceOfRevolution,
+        Geom_TrimmedCurve,
+    )
     from OCP.GeomConvert import GeomConvert
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_REVERSED, TopAbs_WIRE
     from OCP.TopExp import TopExp_Explorer
@@ -79,18 +94,23 @@ def _occ() -> SimpleNamespace:
     return SimpleNamespace(BRep_Tool=BRep_Tool, Curve2d=BRepAdaptor_Curve2d,
                            BRepTools=BRepTools, Bezier=Geom_BezierSurface,
                            BSpline=Geom_BSplineSurface, Trimmed=Geom_RectangularTrimmedSurface,
+                           Swept=(Geom_SurfaceOfRevolution, Geom_SurfaceOfLinearExtrusion),
+                           ExactCurves=(Geom_Line, Geom_Circle, Geom_Ellipse, Geom_Parabola,
+                                        Geom_Hyperbola, Geom_BSplineCurve, Geom_BezierCurve),
+                           TrimmedCurve=Geom_TrimmedCurve, RectTrim=Geom_RectangularTrimmedSurface,
                            GeomConvert=GeomConvert, EDGE=TopAbs_EDGE, WIRE=TopAbs_WIRE,
                            REVERSED=TopAbs_REVERSED, Explorer=TopExp_Explorer, TopoDS=TopoDS)
 
 
 def rectangle(face: Any) -> tuple[float, float, float, float] | None:
-    """(u1, u2, v1, v2) when the face is a B-spline or Bezier surface whose domain is that
-    parameter rectangle (one wire, every boundary curve on one side of it), else None."""
+    """(u1, u2, v1, v2) when the face's domain is that parameter rectangle (one wire, every
+    boundary curve on one side of it) and its surface is a B-spline or Bezier surface, or a
+    surface of revolution or linear extrusion of a curve that is exactly a (rational)
+    B-spline (a line, conic, B-spline or Bezier curve: `_surface_data` converts the patch
+    exactly), else None."""
     k = _occ()
-    surface = k.BRep_Tool.Surface_s(face)
-    while isinstance(surface, k.Trimmed):
-        surface = surface.BasisSurface()
-    if not isinstance(surface, (k.BSpline, k.Bezier)):
+    surface = _bare(k, face)
+    if not (isinstance(surface, (k.BSpline, k.Bezier)) or _exact_sweep(k, surface)):
         return None
     wires = k.Explorer(face, k.WIRE)
     wires.Next()
@@ -109,6 +129,8 @@ def rectangle(face: Any) -> tuple[float, float, float, float] | None:
                    for x, side in ((us, u1), (us, u2), (vs, v1), (vs, v2))):
             return None
         edges.Next()
+    if not isinstance(surface, (k.BSpline, k.Bezier)):
+        return u1, u2, v1, v2   # the converted patch is the rectangle itself
     # the rectangle must lie in the surface's own parameter range (a periodic surface's face
     # may sit a period further on): what the knots describe
     lo_u, hi_u, lo_v, hi_v = surface.Bounds()
@@ -117,6 +139,25 @@ def rectangle(face: Any) -> tuple[float, float, float, float] | None:
     if u1 is None or v1 is None:
         return None
     return u1, u2, v1, v2
+
+
+def _bare(k: SimpleNamespace, face: Any) -> Any:
+    """The face's surface with every rectangular trim taken off."""
+    surface = k.BRep_Tool.Surface_s(face)
+    while isinstance(surface, k.Trimmed):
+        surface = surface.BasisSurface()
+    return surface
+
+
+def _exact_sweep(k: SimpleNamespace, surface: Any) -> bool:
+    """A surface of revolution or extrusion whose swept curve GeomConvert turns into a
+    B-spline curve without approximation (an offset or other curve would be approximated)."""
+    if not isinstance(surface, k.Swept):
+        return False
+    curve = surface.BasisCurve()
+    while isinstance(curve, k.TrimmedCurve):
+        curve = curve.BasisCurve()
+    return isinstance(curve, k.ExactCurves)
 
 
 def _into_range(a: float, b: float, lo: float, hi: float, periodic: bool, tol: float
@@ -131,30 +172,15 @@ def _into_range(a: float, b: float, lo: float, hi: float, periodic: bool, tol: f
     return max(a, lo), min(b, hi)
 
 
-def integrate_rectangles(faces: list[tuple[Any, tuple[float, float, float, float]]],
-                         apex: np.ndarray | None = None) -> RawMoments:
-    """The raw moments about the origin of the faces (each with its rectangle from
-    `rectangle`), each face's share being the cone from ``apex`` (default the origin) over
-    it, summed. ValueError when a surface does not evaluate there or the rule does not settle
-    by ``NURBS_MAX_ORDER`` (the caller falls back)."""
-    apex = np.zeros(3) if apex is None else np.asarray(apex, dtype=float)
-    total = np.zeros(14)
-    err = np.zeros(13)
-    for face, box in faces:
-        values, bar = _face(face, box, apex)
-        total += values
-        err += bar
-    return RawMoments(float(total[0]), total[1:4], total[4:13].reshape(3, 3), float(err[0]),
-                      err[1:4], err[4:13].reshape(3, 3), float(total[13]))
-
-
-def _face(face: Any, box: tuple[float, float, float, float], apex: np.ndarray
-          ) -> tuple[np.ndarray, np.ndarray]:
-    """(values, bar): values = [V, ∫x (3), ∫x xᵀ (9), area] of one face's share, bar the
-    first 13's quadrature bound."""
+def rectangle_face(face: Any, box: tuple[float, float, float, float], apex: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """(values, bar): values = [V, ∫d (3), ∫d dᵀ (9), area] of the cone from ``apex`` over
+    the face (its rectangle from `rectangle`), about the apex (d = x - apex), bar the first
+    13's quadrature bound.
+    ValueError when the surface does not evaluate there or the rule does not settle by
+    ``NURBS_MAX_ORDER`` (the caller falls back)."""
     k = _occ()
-    u1, u2, v1, v2 = box
-    tu, pu, tv, pv, homogeneous = _surface_data(face)
+    tu, pu, tv, pv, homogeneous, (u1, u2, v1, v2) = _surface_data(face, box)
     sign = -1.0 if face.Orientation() == k.REVERSED else 1.0
     # Gauss-Legendre with n points is exact to degree 2n-1: r·N x x of a polynomial patch has
     # degree ~5p in each direction, so the first order integrates that case exactly
@@ -180,14 +206,29 @@ def _face(face: Any, box: tuple[float, float, float, float], apex: np.ndarray
         n += NURBS_ORDER_STEP
 
 
-def _surface_data(face: Any) -> tuple[np.ndarray, int, np.ndarray, int, np.ndarray]:
-    """(u knots, u degree, v knots, v degree, homogeneous poles (nu, nv, 4): w x, w y, w z, w)
-    of the face's surface, non-periodic, its location applied."""
+def _surface_data(face: Any, box: tuple[float, float, float, float]
+                  ) -> tuple[np.ndarray, int, np.ndarray, int, np.ndarray, tuple]:
+    """(u knots, u degree, v knots, v degree, homogeneous poles (nu, nv, 4): w x, w y, w z, w,
+    the rectangle to integrate over) of the face's surface, non-periodic, its location
+    applied. A swept surface's patch over ``box`` is converted exactly (GeomConvert: the
+    swept curve's B-spline form times a line or rational circle arcs) and integrated over its
+    own whole domain; ValueError when the converted patch's corners are not the face's."""
     k = _occ()
-    surface = k.BRep_Tool.Surface_s(face)
-    while isinstance(surface, k.Trimmed):
-        surface = surface.BasisSurface()
-    if isinstance(surface, k.Bezier):
+    surface = _bare(k, face)
+    if isinstance(surface, k.Swept):
+        original = k.BRep_Tool.Surface_s(face)   # with the face's location, as the conversion
+        surface = k.GeomConvert.SurfaceToBSplineSurface_s(k.RectTrim(original, *box))
+        lo_u, hi_u, lo_v, hi_v = surface.Bounds()
+        corners = [(np.array(original.Value(u, v).Coord()),
+                    np.array(surface.Value(cu, cv).Coord()))
+                   for (u, cu) in ((box[0], lo_u), (box[1], hi_u))
+                   for (v, cv) in ((box[2], lo_v), (box[3], hi_v))]
+        size = max(np.abs(a).max() for a, _ in corners) + max(
+            np.abs(a - b).max() for a, _ in corners for b, _ in corners)
+        if max(np.abs(a - b).max() for a, b in corners) > 1e-9 * size:
+            raise ValueError("the converted patch is not the face's")
+        box = (lo_u, hi_u, lo_v, hi_v)
+    elif isinstance(surface, k.Bezier):
         surface = k.GeomConvert.SurfaceToBSplineSurface_s(surface)
     else:
         surface = surface.Copy()   # the periodic flags are changed below: not on the file's
@@ -204,7 +245,7 @@ def _surface_data(face: Any) -> tuple[np.ndarray, int, np.ndarray, int, np.ndarr
             h[i, j] = (w * p.X(), w * p.Y(), w * p.Z(), w)
     tu = _flat_knots(surface.UKnot, surface.UMultiplicity, surface.NbUKnots())
     tv = _flat_knots(surface.VKnot, surface.VMultiplicity, surface.NbVKnots())
-    return tu, surface.UDegree(), tv, surface.VDegree(), h
+    return tu, surface.UDegree(), tv, surface.VDegree(), h, box
 
 
 def _flat_knots(knot: Any, multiplicity: Any, count: int) -> np.ndarray:
@@ -256,14 +297,9 @@ def _rule(n: int, tu: np.ndarray, pu: int, tv: np.ndarray, pv: int, h: np.ndarra
     for start in range(0, len(u), rows):
         block = slice(start, start + rows)
         sums += _block(bu[block], dbu[block], wu[block], bv, dbv, wv, h, p)
-    volume, first_d, dd, area = sums[0], sums[1:4], sums[4:13].reshape(3, 3), sums[13]
-    # the cone from the apex over each patch: points apex + t d, t in [0, 1], dV = t² dt d·N
     values = np.empty(14)
-    values[0] = volume / 3
-    values[1:4] = p * values[0] + first_d / 4
-    cross = np.outer(p, first_d)
-    values[4:13] = (np.outer(p, p) * values[0] + (cross + cross.T) / 4 + dd / 5).ravel()
-    values[13] = area
+    values[:13] = cone_moments(sums[0], sums[1:4], sums[4:13].reshape(3, 3))
+    values[13] = sums[13]
     scale = np.empty(13)
     scale[0] = sums[14] / 3
     scale[1:4] = sums[15] / 3
@@ -271,21 +307,28 @@ def _rule(n: int, tu: np.ndarray, pu: int, tv: np.ndarray, pv: int, h: np.ndarra
     return values, scale
 
 
+def cone_moments(flux: float, first: np.ndarray, second: np.ndarray) -> np.ndarray:
+    """[V, ∫d (3), ∫d dᵀ (9)] of the cone from an apex over a surface, about that apex, from its
+    flux sums ∫ d·N dA, ∫ (d·N) d dA, ∫ (d·N) d dᵀ dA (d = S - apex, N the outward normal): the
+    cone's points apex + t d, t in [0, 1], have dV = t² dt d·N dA."""
+    out = np.empty(13)
+    out[0] = flux / 3
+    out[1:4] = first / 4
+    out[4:13] = (second / 5).ravel()
+    return out
+
+
 def _block(bu: np.ndarray, dbu: np.ndarray, wu: np.ndarray, bv: np.ndarray, dbv: np.ndarray,
            wv: np.ndarray, h: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Sums over a block of u rows (all v): Σ w d·N, Σ w d·N d, Σ w d·N d dᵀ, Σ w |N| (the
-    area), then Σ |w d·N|, Σ |w d·N| r, Σ |w d·N| r² (r = |d| + |P|), padded to 27."""
+    area), then Σ |w d·N|, Σ |w d·N| r, Σ |w d·N| r² (r = |d|), padded to 27."""
     nu, nv = h.shape[:2]
     flat = h.reshape(nu, nv * 4)
     along_v = (bu @ flat).reshape(-1, nv, 4)           # (mu, nv, 4)
     a = np.matmul(bv, along_v)                          # (mu, mv, 4)
     av = np.matmul(dbv, along_v)
     au = np.matmul(bv, (dbu @ flat).reshape(-1, nv, 4))
-    w = a[..., 3:]
-    s = a[..., :3] / w
-    su = (au[..., :3] - au[..., 3:] * s) / w
-    sv = (av[..., :3] - av[..., 3:] * s) / w
-    normal = np.cross(su, sv)
+    s, normal = _point_normal(a, au, av)
     weight = np.outer(wu, wv)
     d = s.reshape(-1, 3) - p
     wr = weight.ravel() * np.sum(d * normal.reshape(-1, 3), axis=1)
@@ -295,8 +338,51 @@ def _block(bu: np.ndarray, dbu: np.ndarray, wu: np.ndarray, bv: np.ndarray, dbv:
     out[4:13] = ((d * wr[:, None]).T @ d).ravel()
     out[13] = np.sum(weight * np.linalg.norm(normal, axis=-1))
     wa = np.abs(wr)
-    r = np.linalg.norm(d, axis=1) + np.linalg.norm(p)
+    r = np.linalg.norm(d, axis=1)
     out[14] = wa.sum()
     out[15] = wa @ r
     out[16] = wa @ (r * r)
     return out
+
+
+def _point_normal(a: np.ndarray, au: np.ndarray, av: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """(S, S_u x S_v) from the homogeneous point and its two derivatives (..., 4): the
+    quotient rule, S_u = (A_u - w_u S) / w."""
+    w = a[..., 3:]
+    s = a[..., :3] / w
+    su = (au[..., :3] - au[..., 3:] * s) / w
+    sv = (av[..., :3] - av[..., 3:] * s) / w
+    return s, np.cross(su, sv)
+
+
+def spline_evaluator(face: Any):
+    """For a face on a B-spline or Bezier surface: a function (u, v) arrays -> (S (n, 3),
+    S_u x S_v (n, 3)), evaluated from the surface's own poles, weights and knots (location
+    applied; a periodic surface's parameters taken modulo its period), vectorised; else None
+    (the caller evaluates point by point)."""
+    k = _occ()
+    basis = _bare(k, face)
+    if not isinstance(basis, (k.BSpline, k.Bezier)):
+        return None
+    tu, pu, tv, pv, h, _ = _surface_data(face, (0.0, 0.0, 0.0, 0.0))
+    ranges = [(t[p], t[-p - 1], periodic) for t, p, periodic in (
+        (tu, pu, basis.IsUPeriodic()), (tv, pv, basis.IsVPeriodic()))]
+
+    def wrap(x: np.ndarray, lo: float, hi: float, periodic: bool) -> np.ndarray:
+        # a periodic face may sit a period further on; the knots describe [lo, hi] only, and
+        # a point a rounding outside it would evaluate to nothing (the basis is cut there)
+        x = lo + np.mod(x - lo, hi - lo) if periodic else x
+        return np.clip(x, lo, hi)
+
+    def evaluate(u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        u = wrap(np.asarray(u, dtype=float), *ranges[0])
+        v = wrap(np.asarray(v, dtype=float), *ranges[1])
+        bu, dbu = _basis(tu, pu, u)
+        bv, dbv = _basis(tv, pv, v)
+        a = np.einsum("pi,ijk,pj->pk", bu, h, bv)
+        au = np.einsum("pi,ijk,pj->pk", dbu, h, bv)
+        av = np.einsum("pi,ijk,pj->pk", bu, h, dbv)
+        return _point_normal(a, au, av)
+
+    return evaluate

@@ -4,7 +4,9 @@ STEP and IGES go through OpenCASCADE's XCAF readers (product names, assembly str
 colours); BREP files hold one shape and no unit (``unit`` says it, default metres). The geometry
 is kept in the FILE's unit (the translator's conversion to millimetres is switched off while
 reading): scaling far-away coordinates before integrating would round them (1e-8 at 1e8 sizes);
-the integral converts its results instead.
+the integral converts its results instead. Faces and shells that belong to no solid (IGES
+written in face mode) are sewn into closed solids where they close (`massprops.cad.sew`), at
+least at the file's own precision (IGES: its resolution and its ten printed digits).
 """
 
 from __future__ import annotations
@@ -52,6 +54,9 @@ class CadSolid:
     colour : (r, g, b) in 0..1 when the file gives one, else None.
     material : {"name", "density" kg/m³, ...} when the file gives one (`massprops.cad.labels`),
         else None.
+    sewn : the tolerance (file unit) at which the file's loose faces were sewn: for a solid
+        made of them (``faces`` of them), or for loose faces that did not close at it; None
+        for a solid as the file wrote it.
     """
 
     name: str
@@ -61,6 +66,8 @@ class CadSolid:
     closed: bool
     colour: tuple[float, float, float] | None = None
     material: dict | None = None
+    sewn: float | None = None
+    faces: int = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,8 +122,8 @@ def _read_brep(name: str, unit: str) -> CadFile:
     if not ok or shape.IsNull():
         raise MeshFormatError(f"{name}: not a readable BREP file; check that it was written by "
                               "BRepTools (OpenCASCADE's native format)")
-    solids = _split(shape, "", "", np.eye(4), None, [0])
-    return CadFile(name, "brep", unit, UNIT_METRES[unit], tuple(solids))
+    pieces = _split(shape, "", "", np.eye(4), None, None, 0)
+    return CadFile(name, "brep", unit, UNIT_METRES[unit], _solids(pieces, 0.0))
 
 
 def _read_xcaf(name: str, fmt: str, unit: str | None) -> CadFile:
@@ -141,7 +148,16 @@ def _read_xcaf(name: str, fmt: str, unit: str | None) -> CadFile:
                          f"unit ({file_unit}); drop {setting_ref('unit')} (the file says what its "
                          "numbers mean)")
     previous = Interface_Static.CVal_s("xstep.cascade.unit")
+    previous_curves = Interface_Static.IVal_s("read.surfacecurve.mode")
     Interface_Static.SetCVal_s("xstep.cascade.unit", occ_unit)  # keep the file's numbers
+    precision = _iges_precision(reader) if fmt == "iges" else 0.0
+    if fmt == "iges":
+        # a trimmed surface's boundary is stored twice, in 3D and in the surface's parameters;
+        # the parameter copy, printed to ten digits, does not close (2π printed as
+        # 6.283185307): taking it, as the file's preference flag asks, the translator built a
+        # 100 m torus's face with two overlapping loops (invalid, volume ~0); the 3D curves,
+        # projected, gave valid faces on every part tried (3: prefer 3D)
+        Interface_Static.SetIVal_s("read.surfacecurve.mode", 3)
     try:
         doc = TDocStd_Document(TCollection_ExtendedString("massprops"))
         # the document's own length unit, else XCAF rescales to millimetres
@@ -153,15 +169,28 @@ def _read_xcaf(name: str, fmt: str, unit: str | None) -> CadFile:
                                   "found no shapes to transfer); check that the file is complete")
     finally:
         Interface_Static.SetCVal_s("xstep.cascade.unit", previous)
+        Interface_Static.SetIVal_s("read.surfacecurve.mode", previous_curves)
     tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
     roots = TDF_LabelSequence()
     tool.GetFreeShapes(roots)
-    solids: list[CadSolid] = []
-    counter = [0]
+    pieces: list[_Piece] = []
     for i in range(1, roots.Length() + 1):
-        _walk(tool, reader, roots.Value(i), None, "", name, solids, counter)
-    return CadFile(name, fmt, file_unit, UNIT_METRES[file_unit], tuple(solids),
-                   10 if fmt == "iges" else None)
+        _walk(tool, reader, roots.Value(i), None, "", name, pieces)
+    return CadFile(name, fmt, file_unit, UNIT_METRES[file_unit], _solids(pieces, precision),
+                   IGES_DIGITS if fmt == "iges" else None)
+
+
+IGES_DIGITS = 10
+"""Significant digits IGES writers print (OpenCASCADE's: 6.283185307 for 2π, whatever the
+global section claims)."""
+
+
+def _iges_precision(reader: Any) -> float:
+    """What an IGES file's numbers are good to (file unit): its stated resolution, and at
+    least half the last printed digit at its largest coordinate (the global section's)."""
+    section = reader.IGESModel().GlobalSection()
+    return max(float(section.Resolution()),
+               0.5 * 10.0 ** (1 - IGES_DIGITS) * abs(float(section.MaxCoord())))
 
 
 def _xcaf_reader(fmt: str) -> Any:
@@ -207,7 +236,7 @@ def _file_unit(name: str, fmt: str, reader: Any) -> tuple[str, str]:
 
 
 def _walk(tool: Any, reader: Any, label: Any, location: Any, prefix: str, file: str,
-          out: list[CadSolid], counter: list[int]) -> None:
+          out: list[_Piece]) -> None:
     """Depth first through the assembly: components carry their placement down."""
     from OCP.collections import Sequence_TDF_Label as TDF_LabelSequence  # optional extra
     from OCP.TDF import TDF_Label
@@ -225,7 +254,7 @@ def _walk(tool: Any, reader: Any, label: Any, location: Any, prefix: str, file: 
             referred = TDF_Label()
             XCAFDoc_ShapeTool.GetReferredShape_s(component, referred)
             placed = location.Multiplied(XCAFDoc_ShapeTool.GetLocation_s(component))
-            _walk(tool, reader, referred, placed, here, file, out, counter)
+            _walk(tool, reader, referred, placed, here, file, out)
         return
     shape = XCAFDoc_ShapeTool.GetShape_s(label)
     if shape.IsNull():
@@ -234,37 +263,85 @@ def _walk(tool: Any, reader: Any, label: Any, location: Any, prefix: str, file: 
         name = iges_name(reader, shape)   # not the shape type the translator puts instead
     matrix = _matrix(location)
     placed = shape if location.IsIdentity() else shape.Moved(location)
-    out.extend(_split(placed, prefix, name, matrix, colour(label), counter, material(label)))
+    out.extend(_split(placed, prefix, name, matrix, colour(label), material(label),
+                      len(out) and out[-1].part + 1))
+
+
+@dataclass(frozen=True, eq=False)
+class _Piece:
+    """A solid, shell or loose face of one part, before sewing and naming. part : which part
+    (label) of the file it belongs to, in file order."""
+
+    shape: Any
+    prefix: str
+    name: str
+    matrix: np.ndarray
+    rgb: tuple[float, float, float] | None
+    material: dict | None
+    part: int
+    solid: bool
 
 
 def _split(shape: Any, prefix: str, name: str, matrix: np.ndarray,
-           rgb: tuple[float, float, float] | None, counter: list[int],
-           carried: dict | None = None) -> list[CadSolid]:
+           rgb: tuple[float, float, float] | None, carried: dict | None, part: int
+           ) -> list[_Piece]:
     """The solids of one part, then its shells and faces that belong to no solid (open)."""
     from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID  # optional extra
     from OCP.TopExp import TopExp_Explorer
 
-    pieces: list[tuple[Any, bool]] = []
-    explorer = TopExp_Explorer(shape, TopAbs_SOLID)
-    while explorer.More():
-        pieces.append((explorer.Current(), True))
-        explorer.Next()
-    explorer = TopExp_Explorer(shape, TopAbs_SHELL, TopAbs_SOLID)
-    while explorer.More():
-        pieces.append((explorer.Current(), False))
-        explorer.Next()
-    explorer = TopExp_Explorer(shape, TopAbs_FACE, TopAbs_SHELL)
-    while explorer.More():
-        pieces.append((explorer.Current(), False))
-        explorer.Next()
-    out = []
-    for k, (piece, is_solid) in enumerate(pieces):
-        counter[0] += 1
-        label = (f"solid{counter[0]}" if not name else
-                 name if len(pieces) == 1 else f"{name}.{k + 1}")
-        closed = is_solid and _closed(piece)
-        out.append(CadSolid(label, prefix + label, piece, matrix, closed, rgb, carried))
+    out: list[_Piece] = []
+    for kind, outside in ((TopAbs_SOLID, None), (TopAbs_SHELL, TopAbs_SOLID),
+                          (TopAbs_FACE, TopAbs_SHELL)):
+        explorer = (TopExp_Explorer(shape, kind) if outside is None else
+                    TopExp_Explorer(shape, kind, outside))
+        while explorer.More():
+            out.append(_Piece(explorer.Current(), prefix, name, matrix, rgb, carried, part,
+                              kind == TopAbs_SOLID))
+            explorer.Next()
     return out
+
+
+def _solids(pieces: list[_Piece], precision: float) -> tuple[CadSolid, ...]:
+    """The pieces as named solids, in file order, the loose ones sewn first (`massprops.cad.
+    sew`, at least at ``precision``): a sewn solid takes the place, part and name of its
+    first face (no name when its faces come from several parts)."""
+    loose = [i for i, piece in enumerate(pieces) if not piece.solid]
+    tolerance, faces = None, {}
+    if loose:
+        from massprops.cad.sew import sew_loose, sewing_tolerance  # same layer; loose faces
+
+        shapes = [pieces[i].shape for i in loose]
+        tolerance = sewing_tolerance(shapes, precision)
+        replaced: dict[int, _Piece] = {}
+        taken: set[int] = set()
+        for sewn in sew_loose(shapes, tolerance):
+            members = [loose[j] for j in sewn.pieces]
+            if not members:
+                continue
+            first = pieces[members[0]]
+            if any(pieces[i].part != first.part for i in members):
+                first = _Piece(first.shape, first.prefix, "", np.eye(4), None, None,
+                               -1 - len(replaced), False)
+            replaced[members[0]] = _Piece(sewn.solid, first.prefix, first.name, first.matrix,
+                                          first.rgb, first.material, first.part, True)
+            faces[id(replaced[members[0]])] = sewn.faces
+            taken.update(members)
+        pieces = [replaced.get(i, piece) for i, piece in enumerate(pieces)
+                  if i in replaced or i not in taken]
+    per_part: dict[int, int] = {}
+    for piece in pieces:
+        per_part[piece.part] = per_part.get(piece.part, 0) + 1
+    out, seen = [], {}
+    for number, piece in enumerate(pieces, start=1):
+        k = seen.get(piece.part, 0)
+        seen[piece.part] = k + 1
+        label = (f"solid{number}" if not piece.name else
+                 piece.name if per_part[piece.part] == 1 else f"{piece.name}.{k + 1}")
+        made = id(piece) in faces or not piece.solid   # sewn, or loose and left open
+        out.append(CadSolid(label, piece.prefix + label, piece.shape, piece.matrix,
+                            piece.solid and _closed(piece.shape), piece.rgb, piece.material,
+                            tolerance if made else None, faces.get(id(piece), 0)))
+    return tuple(out)
 
 
 def _closed(solid: Any) -> bool:

@@ -260,7 +260,7 @@ def shell_solid(shape: Any, scale: float, name: str, thickness: float
                           np.full((3, 3), ulps * volume * float(reach @ reach)) * s**5)
     tolerance = float(k.ShapeTolerance().Tolerance(local, 1, k.TopAbs_SHAPE))
     integral = SolidIntegral(origin * s, moments, None, tolerance * s, shell.area * s * s,
-                             np.array(half) * s, faces, None, "shell")
+                             np.array(half) * s, faces, None, "shell", np.asarray(origin))
     # first order, as `massprops.repair.bars`: the COM moves by (Δ∫x + |c| ΔV) / V, and the
     # inertia about it by Δ(∫x xᵀ) (twice on the diagonal) and the shift V c cᵀ's change
     dv = shell.bar_volume

@@ -59,7 +59,8 @@ def align_cad(result: CadInspection, output: str | os.PathLike, *, force: bool =
     c = props.center_of_mass
     cad = result.file
     target = check_output(output, cad_output(), force=force, protect=[cad.name])
-    moved = [_moved(s.solid.shape, c / cad.scale, r) for s in result.solids]
+    anchor, delta = _anchored_com(result)
+    moved = [_moved(s.solid.shape, anchor, delta, r) for s in result.solids]
     kind = _EXACT.get(target.suffix.lower())
     if kind is None:
         _write_mesh(moved, target, cad, force)
@@ -69,22 +70,45 @@ def align_cad(result: CadInspection, output: str | os.PathLike, *, force: bool =
     return CadAlignment(r.T.copy(), np.array(c), props.principal_moments.copy(), kind is None)
 
 
-def _moved(shape: Any, com: np.ndarray, r: np.ndarray) -> Any:
-    """The shape's geometry translated by -com, THEN rotated by Rᵀ: subtracting first keeps a
-    far part's coordinates exact (as `massprops.inspection.align.to_principal_frame` does for
-    meshes)."""
+def _anchored_com(result: CadInspection) -> tuple[np.ndarray, np.ndarray]:
+    """The whole's COM as anchor + delta, both in the file unit: the anchor the first solid's
+    local origin (the float its geometry was integrated about), delta the COM from it (of the
+    part's size). One float for the COM of a part 1e6 sizes away is rounded to half an ulp of
+    that distance (1e-9 mm at 1.5e7 mm, 8e-11 of a 10 mm part): the written part's COM would be
+    off by that much."""
+    scale = result.file.scale
+    solids = result.solids
+    anchors = [np.zeros(3) if s.integral.anchor is None else s.integral.anchor for s in solids]
+    anchor = anchors[0]
+    masses = np.array([s.properties.mass for s in solids])
+    # each solid's COM from the anchor: the anchors' difference (exact where they are close)
+    # in the file unit, then the solid's own COM from its anchor (small) in metres
+    rel = np.array([(a - anchor) * scale + s.integral.moments.com_local
+                    for a, s in zip(anchors, solids)])
+    delta = (masses[:, None] * rel).sum(axis=0) / masses.sum()
+    return anchor, delta / scale
+
+
+def _moved(shape: Any, anchor: np.ndarray, delta: np.ndarray, r: np.ndarray) -> Any:
+    """The shape's geometry translated by -anchor, then by -delta, THEN rotated by Rᵀ (file
+    unit): each far coordinate minus the anchor near it is exact (Sterbenz), and what is left is
+    of the part's size; one composite transform would add the rounding of the far coordinates
+    back in (as `massprops.inspection.align.to_principal_frame` does for meshes)."""
     # optional extra: OCP is imported only once a CAD file is read
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
     from OCP.gp import gp_Trsf, gp_Vec
     from OCP.TopLoc import TopLoc_Location
 
     shift = gp_Trsf()
-    shift.SetTranslation(gp_Vec(*(-com)))
+    shift.SetTranslation(gp_Vec(*(-anchor)))
     placement = shape.Location()
     if not placement.IsIdentity():   # into the geometry, as in integrate_solid
         shift = shift.Multiplied(placement.Transformation())
         shape = shape.Located(TopLoc_Location())
     shape = BRepBuilderAPI_Transform(shape, shift, True).Shape()
+    near = gp_Trsf()
+    near.SetTranslation(gp_Vec(*(-delta)))
+    shape = BRepBuilderAPI_Transform(shape, near, True).Shape()
     rotate = gp_Trsf()
     rt = r.T
     rotate.SetValues(*rt[0], 0.0, *rt[1], 0.0, *rt[2], 0.0)

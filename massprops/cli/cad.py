@@ -100,11 +100,11 @@ def _table(d: dict) -> None:
     if "cad" in d:
         faces = ", ".join(f"{k} {v}" for k, v in d["cad"]["faces"].items())
         click.echo(f"  faces             {faces}; tolerance {d['cad']['tolerance']:.3g} m")
-        material = d["cad"].get("material")
-        if material is not None:
-            density = material.get("density")
-            click.echo(f"  material          {material['name']}" + (
-                "" if density is None else f" ({density:.6g} kg/m³ in the file; not applied)"))
+        stated = d["cad"].get("material")
+        used = d.get("material", {})
+        if stated is not None or used.get("source") not in (None, "default"):
+            name = "" if stated is None else f"{stated['name']}; "
+            click.echo(f"  material          {name}density from {used.get('source')}")
     for kind in ("rounding", "integration", "input", "repair"):
         bar = bars.get(kind)
         if bar is not None:
