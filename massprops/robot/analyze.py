@@ -22,10 +22,11 @@ from massprops.errors import (
     error_message,
     setting_ref,
 )
+from massprops.robot.doctor.validity import Validity, judge
 from massprops.robot.formats.xacro_run import EXPANDED, expand_xacro, has_xacro, is_xacro
 from massprops.robot.formats.xmltree import parse_xml, parse_xml_bytes
 from massprops.robot.inertials.combine import LinkMass, MeshCache, combine, integrate_geometry
-from massprops.robot.inertials.compare import Comparison, compare, validity_problems
+from massprops.robot.inertials.compare import Comparison, compare
 from massprops.robot.model import Link, RobotModel
 from massprops.tolerances import WRITE_KEEP_RTOL
 
@@ -59,20 +60,41 @@ class LinkReport:
     def name(self) -> str:
         return self.link.name
 
-    def stated_problems(self) -> tuple[str, ...]:
+    def stated_validity(self) -> Validity | None:
+        """The stated inertial's `doctor.validity` tests (against the geometry when there is
+        some), or None when nothing is stated."""
         s = self.link.stated
-        return () if s is None else validity_problems(s.mass, s.inertia)
+        if s is None:
+            return None
+        if self.comparison is not None and self.comparison.valid is not None:
+            return self.comparison.valid
+        return judge(s.mass, s.center_of_mass, s.inertia, None)
+
+    def computed_validity(self) -> Validity | None:
+        """The computed inertial's tests (an open mesh counted with signed volumes can fail
+        them), or None when nothing was computed."""
+        c = self.computed
+        return None if c is None else judge(c.mass, c.center_of_mass, c.inertia, c.bounds)
+
+    def stated_problems(self) -> tuple[str, ...]:
+        v = self.stated_validity()
+        return () if v is None else v.problems
 
     def as_dict(self, model: str) -> dict:
         """The contract's JSON object for this link, plus "line", "comparison", "source" (which
         geometry made it) and, where a repair changed a mesh, "repairs" (mesh -> record)."""
         s = self.link.stated
+        valid = self.stated_validity()
         stated = None if s is None else {
             "mass": s.mass, "center_of_mass": s.center_of_mass.tolist(),
-            "inertia": s.inertia.tolist(), "valid": not self.stated_problems()}
+            "inertia": s.inertia.tolist(), "valid": valid.ok}
+        computed = None
+        if self.computed is not None:
+            computed = {**self.computed.as_dict(), "valid": self.computed_validity().as_dict()}
         return {"model": model, "link": self.name, "line": self.link.node.line,
                 "status": self.status, "reason": self.reason, "stated": stated,
-                "computed": None if self.computed is None else self.computed.as_dict(),
+                **({"valid": valid.as_dict()} if valid is not None else {}),
+                "computed": computed,
                 "comparison": None if self.comparison is None else self.comparison.as_dict(),
                 "source": self.link.source if self.link.geometries else None,
                 **({"repairs": self.repairs} if self.repairs else {}),

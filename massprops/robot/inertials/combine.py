@@ -19,6 +19,7 @@ from massprops.inertia import parallel_axis, principal_axes, rotate_inertia
 from massprops.inspection.file import inspect_mesh
 from massprops.io import read_mesh
 from massprops.mesh import Mesh
+from massprops.robot.doctor.bounds import Bounds, bounds_of, primitive_points
 from massprops.robot.inertials.primitives import PRIMITIVES
 from massprops.robot.model import Geometry
 
@@ -33,6 +34,8 @@ class Part:
     ``center``, link axes. lower, upper : (3,) m, an axis-aligned box around it in the link
     frame: tight for primitives; for a mesh, the box around its own bounding box turned into
     the link frame (tight unless the pose turns it). warnings : what the health checks said.
+    points : (k, 3) m, link frame, points whose convex hull contains the geometry (a mesh's hull
+    vertices, a primitive's circumscribing polytope: `doctor.bounds`), or None.
     """
 
     volume: float
@@ -42,6 +45,7 @@ class Part:
     upper: np.ndarray
     warnings: tuple[str, ...] = ()
     repairs: dict | None = None
+    points: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,6 +56,8 @@ class LinkMass:
     inertia : (3, 3) kg·m² about the centre of mass, link axes. principal_moments (3,) ascending
     and principal_axes (3, 3) (columns) as `inertia.principal_axes`. size : m, the diagonal of
     the axis-aligned box around its geometry (the scale COM offsets are measured against).
+    bounds : the geometry's convex hull and an ellipsoid around it (`doctor.bounds.Bounds`), or
+    None (flat geometry); what `doctor.validity` judges the COM and realizability against.
     """
 
     mass: float
@@ -61,6 +67,7 @@ class LinkMass:
     principal_moments: np.ndarray
     principal_axes: np.ndarray
     size: float
+    bounds: Bounds | None = None
 
     def as_dict(self) -> dict:
         return {"mass": self.mass, "center_of_mass": self.center_of_mass.tolist(),
@@ -78,6 +85,18 @@ class MeshCache:
         self.allow_open = allow_open
         self.repairs = repairs
         self._store: dict[tuple, tuple] = {}
+        self._hulls: dict[int, np.ndarray] = {}
+
+    def hull_points(self, mesh: Mesh) -> np.ndarray:
+        """(k, 3) m: the vertices of ``mesh``'s convex hull (all of them if Qhull refuses)."""
+        if id(mesh) not in self._hulls:
+            from scipy.spatial import ConvexHull  # only for the doctor's bounds
+
+            try:
+                self._hulls[id(mesh)] = mesh.vertices[ConvexHull(mesh.vertices).vertices]
+            except Exception:  # Qhull's error for flat or degenerate point sets
+                self._hulls[id(mesh)] = mesh.vertices
+        return self._hulls[id(mesh)]
 
     def get(self, geom: Geometry):
         """(mesh with the scale applied, its Inspection at unit density)."""
@@ -133,11 +152,11 @@ def integrate_geometry(geom: Geometry, meshes: MeshCache) -> Part:
         centre, half = a @ ((lo + hi) / 2) + t, np.abs(a) @ ((hi - lo) / 2)
         return Part(p.volume, a @ p.center_of_mass + t, rotate_inertia(p.inertia, a),
                     centre - half, centre + half, tuple(result.warnings),
-                    result.repairs_as_dict())
+                    result.repairs_as_dict(), meshes.hull_points(mesh) @ a.T + t)
     solid = PRIMITIVES[geom.kind](*geom.dims)
     half = solid.half_extents(a)
     return Part(solid.volume, np.asarray(t, dtype=np.float64), rotate_inertia(solid.inertia, a),
-                t - half, t + half)
+                t - half, t + half, points=primitive_points(geom.kind, solid.dims) @ a.T + t)
 
 
 def combine(parts: list[Part], masses: list[float], total: float | None = None) -> LinkMass:
@@ -154,8 +173,10 @@ def combine(parts: list[Part], masses: list[float], total: float | None = None) 
     moments, axes = principal_axes(inertia)
     lower = np.min([p.lower for p in parts], axis=0)
     upper = np.max([p.upper for p in parts], axis=0)
+    points = [p.points for p in parts if p.points is not None]
+    bounds = bounds_of(np.concatenate(points)) if len(points) == len(parts) else None
     return LinkMass(whole if total is None else float(total), float(sum(p.volume for p in parts)),
-                    com, inertia, moments, axes, float(np.linalg.norm(upper - lower)))
+                    com, inertia, moments, axes, float(np.linalg.norm(upper - lower)), bounds)
 
 
 def convex_hull(mesh: Mesh) -> Mesh:
