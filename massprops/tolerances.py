@@ -62,6 +62,13 @@ fraction of the link's size outside a facet: the hull's facet planes carry ~1e-1
 round-off and the geometry's poses another few ulps; a COM really outside is outside by the
 geometry's own dimensions."""
 
+DIAGNOSIS_RTOL = 1e-4
+"""The inertia doctor names a cause only when the model it makes of the stated inertial leaves at
+most this relative difference (measured as ``--check`` measures). Descriptions print five to
+eight significant digits (rounding ≤ 5e-6 of each number) and meshes exported twice differ by
+~1e-6; the causes themselves move the numbers by percent or by factors (a unit is 1e3 to 1e6, a
+bounding box or a hull percent), so 1e-4 separates them from rounding with room on both sides."""
+
 WRITE_KEEP_RTOL = 1e-12
 """``model --write`` without ``--check``: a stated inertial within this of the computed one
 (relative, as ``--check`` measures: mass, COM / link size, inertia in the 2-norm) is kept byte

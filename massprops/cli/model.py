@@ -61,7 +61,7 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
 
         report = analyze_model(description, source=source or "auto", density=density,
                                package_paths=package_paths, allow_open=allow_open,
-                               xacro_args=xacro_args, repairs=repairs)
+                               xacro_args=xacro_args, repairs=repairs, check=rtol)
         for w in report.model.warnings:
             say_warning(description, w)
         for line in report.errors:

@@ -241,6 +241,8 @@ def print_model(report, rtol: float | None = None) -> None:
                  f"{cmp.com_rel:.2%}", f"{cmp.inertia_rel:.2%}", angle,
                  "yes" if not cmp.problems else "NO", verdict)
             notes.extend(f"{r.name}: stated {p}" for p in cmp.problems)
+            if r.diagnosis is not None:
+                notes.append(f"{r.name}: diagnosis: {cli_text(r.diagnosis.detail)}")
         notes.extend(f"{r.name}: {cli_text(w)}" for w in r.warnings)
         notes.extend(f"{r.name}: {mesh}: repaired ({', '.join(rec)})"
                      for mesh, rec in (r.repairs or {}).items())

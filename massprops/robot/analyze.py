@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -22,11 +22,13 @@ from massprops.errors import (
     error_message,
     setting_ref,
 )
+from massprops.robot.doctor.diagnose import Diagnosis, diagnose
+from massprops.robot.doctor.shapes import shape_bases
 from massprops.robot.doctor.validity import Validity, judge
 from massprops.robot.formats.xacro_run import EXPANDED, expand_xacro, has_xacro, is_xacro
 from massprops.robot.formats.xmltree import parse_xml, parse_xml_bytes
 from massprops.robot.inertials.combine import LinkMass, MeshCache, combine, integrate_geometry
-from massprops.robot.inertials.compare import Comparison, compare
+from massprops.robot.inertials.compare import Comparison, compare, relative_difference
 from massprops.robot.model import Link, RobotModel
 from massprops.tolerances import WRITE_KEEP_RTOL
 
@@ -45,7 +47,10 @@ class LinkReport:
     reported as it is) or "skipped"; ``reason`` why not computed; ``error`` True when the
     skip means an input could not be processed (a missing or unreadable mesh), False for a link
     that simply has nothing to compute (no geometry, a frame link). ``repairs``: mesh reference
-    -> its ``repairs`` object, for the meshes a repair changed (None: none did)."""
+    -> its ``repairs`` object, for the meshes a repair changed (None: none did). ``shapes``:
+    the link's other shapes for the doctor (`doctor.shapes.shape_bases`), computed on demand.
+    ``checked``: a ``--check`` ran (the row then has "diagnosis"); ``diagnosis``: why the
+    stated inertial differs by more than its RTOL (`doctor.diagnose`), else None."""
 
     link: Link
     status: str
@@ -55,6 +60,9 @@ class LinkReport:
     comparison: Comparison | None
     warnings: tuple[str, ...]
     repairs: dict | None = None
+    shapes: Callable[[], list] | None = field(default=None, repr=False)
+    checked: bool = False
+    diagnosis: Diagnosis | None = None
 
     @property
     def name(self) -> str:
@@ -98,6 +106,8 @@ class LinkReport:
                 "comparison": None if self.comparison is None else self.comparison.as_dict(),
                 "source": self.link.source if self.link.geometries else None,
                 **({"repairs": self.repairs} if self.repairs else {}),
+                **({"diagnosis": None if self.diagnosis is None else self.diagnosis.as_dict()}
+                   if self.checked else {}),
                 "warnings": list(self.warnings)}
 
 
@@ -229,7 +239,7 @@ def analyze_model(path: str | os.PathLike, *, source: str = "auto",
                   package_paths: Sequence[str | os.PathLike] = (),
                   allow_open: bool = False,
                   xacro_args: Mapping[str, str] | None = None,
-                  repairs=None) -> ModelReport:
+                  repairs=None, check: float | None = None) -> ModelReport:
     """Every link of the description at ``path``: its geometry integrated, against its stated
     inertial.
 
@@ -237,6 +247,8 @@ def analyze_model(path: str | os.PathLike, *, source: str = "auto",
         "visual" (MJCF: see mjcf.py; auto is collision there, MuJoCo's mass geoms).
     repairs : a `massprops.repair.RepairOptions` applied to every mesh (per mesh, reported
         per link), or None.
+    check : RTOL of ``--check``: every link whose stated inertial differs by more gets a
+        `doctor.diagnose.Diagnosis` (the others None); None: no diagnosis.
     density : kg/m³ for every geometry; default: keep each link's stated mass (the density
         follows from its geometry's volume); MJCF bodies without an inertial use their geoms'
         own density/mass (MuJoCo's rule); URDF/SDF links without a stated mass are skipped.
@@ -254,7 +266,55 @@ def analyze_model(path: str | os.PathLike, *, source: str = "auto",
         reports, note = apply_rules(reports, model.rules)
         if note:
             model = replace(model, warnings=model.warnings + (note,))
+    if check is not None:
+        if not (math.isfinite(check) and check >= 0):
+            raise UsageError(f"{setting_ref('check')} needs a tolerance >= 0, got {check!r}")
+        other = _OtherGeometry(path, model, meshes, density, package_paths, xacro_args)
+        reports = [replace(r, checked=True, diagnosis=_diagnosis(r, check, other))
+                   for r in reports]
     return ModelReport(model, str(path), tuple(reports))
+
+
+def _diagnosis(r: LinkReport, rtol: float, other: _OtherGeometry) -> Diagnosis | None:
+    """Why link ``r``'s stated inertial differs by more than ``rtol``, or None if it does not."""
+    if r.comparison is None or r.comparison.worst <= rtol:
+        return None
+
+    def shapes() -> list:
+        bases = r.shapes() if r.shapes is not None else []
+        return bases + other.bases(r)
+
+    return diagnose(r.link.stated, r.computed, shapes, relative_difference)
+
+
+class _OtherGeometry:
+    """The links computed from the other geometry set (visual for collision, and back), read on
+    the first link that asks: the doctor's ``other_geometry``."""
+
+    def __init__(self, path, model, meshes, density, package_paths, xacro_args) -> None:
+        self.args = (path, package_paths, xacro_args)
+        self.model, self.meshes, self.density = model, meshes, density
+        self._links: dict[str, dict] = {}
+
+    def bases(self, r: LinkReport) -> list:
+        other = "visual" if r.link.source == "collision" else "collision"
+        if other not in self._links:
+            path, package_paths, xacro_args = self.args
+            try:
+                model = load_model(path, source=other, package_paths=package_paths,
+                                   xacro_args=xacro_args)
+                self._links[other] = {link.name: link for link in model.links}
+            except MassPropsError:
+                self._links[other] = {}
+        link = self._links[other].get(r.name)
+        if link is None or not link.geometries or link.source != other:
+            return []
+        o = _link(link, self.model, self.meshes, self.density, other)
+        if o.computed is None:
+            return []
+        c = o.computed
+        return [((("other_geometry", {"source": other}, f"of the {other} geometry"),),
+                 c.mass, c.center_of_mass, c.inertia)]
 
 
 def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | None,
@@ -288,25 +348,27 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
             repaired[g.uri or g.kind] = part.repairs
         parts.append(part)
     stated = link.stated
-    total = None
-    if density is not None:
-        masses = [density * p.volume for p in parts]
-    else:
+
+    def split(parts) -> tuple[list[float], float | None] | None:
+        """(each part's mass, the link's total to report) by the link's mass rule."""
+        if density is not None:
+            return [density * p.volume for p in parts], None
         weights = [g.mass if g.mass is not None else (g.density or 1.0) * p.volume
                    for g, p in zip(link.geometries, parts)]
         if stated is not None and stated.mass > 0:
-            masses = [stated.mass * w / sum(weights) for w in weights]
-            total = stated.mass
-        elif link.auto_mass is not None:  # SDF auto: the densities' shares of the given mass
-            masses = [link.auto_mass * w / sum(weights) for w in weights]
-            total = link.auto_mass
-        elif model.format == "mjcf" or all(g.density is not None for g in link.geometries):
-            masses = weights
-        else:
-            return skipped(f"no stated mass to keep and no {setting_ref('density')}: give "
-                           f"{setting_ref('density')} RHO "
-                           "(kg/m³)", False)
-    computed = combine(parts, masses, total)
+            return [stated.mass * w / sum(weights) for w in weights], stated.mass
+        if link.auto_mass is not None:  # SDF auto: the densities' shares of the given mass
+            return [link.auto_mass * w / sum(weights) for w in weights], link.auto_mass
+        if model.format == "mjcf" or all(g.density is not None for g in link.geometries):
+            return weights, None
+        return None
+
+    shares = split(parts)
+    if shares is None:
+        return skipped(f"no stated mass to keep and no {setting_ref('density')}: give "
+                       f"{setting_ref('density')} RHO "
+                       "(kg/m³)", False)
+    computed = combine(parts, *shares)
     if stated is None:
         if model.format != "mjcf" and link.inertial_node is None:  # MJCF, SDF auto: the sum
             warnings.append("no stated inertial: nothing to compare")
@@ -316,4 +378,5 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
     if not np.isfinite(computed.inertia).all():
         return skipped("the computed inertia is not finite", True)
     return LinkReport(link, "computed", None, False, computed, comparison, tuple(warnings),
-                      repaired or None)
+                      repaired or None,
+                      shapes=lambda: shape_bases(link.geometries, parts, meshes, split))

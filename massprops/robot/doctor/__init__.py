@@ -6,7 +6,7 @@ inertial differs from the one its geometry gives.
   inside the hull, density realizability inside the ellipsoid: Wensing, Kim & Slotine 2017);
 - `frames`: causes of a tensor written in the wrong frame (``about_point``, ``rotated``,
   ``axes_permuted``);
-- `typing`: causes of numbers written wrong (``length_unit``, ``mass_unit``,
+- `writing`: causes of numbers written wrong (``length_unit``, ``mass_unit``,
   ``product_sign``, ``decimal_slip``, ``placeholder``);
 - `shapes`: causes of another shape integrated (``bounding_box``, ``convex_hull``,
   ``thin_shell``, ``mujoco_legacy``, ``other_geometry``);

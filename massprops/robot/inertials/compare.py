@@ -28,7 +28,7 @@ from massprops.robot.inertials.combine import LinkMass
 from massprops.robot.model import StatedInertial
 from massprops.tolerances import DEGENERATE_MOMENT_RTOL
 
-__all__ = ["Comparison", "compare", "validity_problems"]
+__all__ = ["Comparison", "compare", "relative_difference", "validity_problems"]
 
 
 @dataclass(frozen=True)
@@ -65,6 +65,16 @@ def validity_problems(mass: float, inertia: np.ndarray) -> tuple[str, ...]:
     """Why (mass, inertia about the COM) cannot belong to any body; () when it can (the tensor
     tests of `doctor.validity.judge`, without geometry)."""
     return judge(mass, np.zeros(3), inertia, None).problems
+
+
+def relative_difference(mass_a: float, com_a: np.ndarray, inertia_a: np.ndarray, mass_b: float,
+                        com_b: np.ndarray, inertia_b: np.ndarray, size: float) -> float:
+    """max(mass, COM / size, inertia) relative difference of inertial a from inertial b (kg, m,
+    kg·m² about each COM, one frame), as the module measures them: ``Comparison.worst``."""
+    return max(abs(mass_a - mass_b) / abs(mass_b),
+               float(np.linalg.norm(np.asarray(com_a) - com_b)) / size,
+               float(np.linalg.norm(inertia_a - inertia_b, 2))
+               / float(np.linalg.norm(inertia_b, 2)))
 
 
 def compare(stated: StatedInertial, computed: LinkMass) -> Comparison:
