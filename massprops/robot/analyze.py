@@ -155,25 +155,42 @@ class ModelReport:
                 f"{self.name}: {len(bad)} link(s) differ from their geometry by more than "
                 f"{rtol:g}: {'; '.join(bad)}; fix the inertials (massprops model --write OUT)")
 
-    def to_rewrite(self, rtol: float | None = None) -> list[LinkReport]:
+    def to_rewrite(self, rtol: float | None = None, *,
+                   only_invalid: bool = False) -> list[LinkReport]:
         """The computed links whose inertial is off: none stated, or not physically valid, or
         differing from the computed one by more than ``rtol`` (default WRITE_KEEP_RTOL:
-        round-off); the others are kept as written."""
+        round-off); with ``only_invalid``, only those whose stated inertial fails a validity
+        test. A link whose computed inertial fails one is never chosen (nothing better to
+        write); the others are kept as written."""
         keep = WRITE_KEEP_RTOL if rtol is None else rtol
-        return [r for r in self.links if r.computed is not None and (
-            r.link.stated is None or r.stated_problems() or r.comparison is None
-            or r.comparison.worst > keep)]
+        chosen = []
+        for r in self.links:
+            if r.computed is None or not r.computed_validity().ok:
+                continue
+            invalid = bool(r.stated_problems())
+            if only_invalid:
+                off = invalid
+            else:
+                off = (r.link.stated is None or invalid or r.comparison is None
+                       or r.comparison.worst > keep)
+            if off:
+                chosen.append(r)
+        return chosen
 
     def write(self, out: str | os.PathLike, *, force: bool = False,
-              rtol: float | None = None) -> tuple[str, ...]:
+              rtol: float | None = None, keep_mass: bool = False,
+              only_invalid: bool = False) -> tuple[Rewrite, ...]:
         """Write the description with the inertial of every link that is off (`to_rewrite`)
-        replaced, or added where it has none; every other byte as read. Returns the names of
-        the links rewritten. Atomic, never over the input."""
+        replaced, or added where it has none; every other byte as read. ``keep_mass``: the
+        stated mass with the geometry's distribution (COM, and the tensor scaled to that mass;
+        a link with no stated mass gets the computed one). Returns what changed, per link
+        rewritten. Atomic, never over the input."""
         # deferred: a description loads only its own format's parser
         from massprops.robot.write.writeback import edited_bytes, write_description
 
-        chosen = self.to_rewrite(rtol)
-        edits = [(r.link.node, r.link.inertial_node, r.computed) for r in chosen]
+        chosen = self.to_rewrite(rtol, only_invalid=only_invalid)
+        written = [_written(r, keep_mass) for r in chosen]
+        edits = [(r.link.node, r.link.inertial_node, w) for r, w in zip(chosen, written)]
         own = (self.model.path, Path(f"{self.model.path}{EXPANDED}"))
         elsewhere = [r.name for r in chosen
                      if r.link.node.file is not None and r.link.node.file not in own]
@@ -184,7 +201,52 @@ class ModelReport:
                              "compiled model (mujoco.mj_saveLastXML) first")
         data = edited_bytes(self.model.data, self.model.format, edits)
         write_description(data, out, source=self.model.path, force=force)
-        return tuple(r.name for r in chosen)
+        keep = WRITE_KEEP_RTOL if rtol is None else rtol
+        return tuple(Rewrite.of(r, w, keep) for r, w in zip(chosen, written))
+
+
+def _written(r: LinkReport, keep_mass: bool) -> LinkMass:
+    """What ``--write`` puts in link ``r``: the computed inertial, or with ``keep_mass`` the
+    stated mass and the computed distribution (COM as computed, tensor × m_stated / m)."""
+    c, s = r.computed, r.link.stated
+    if not keep_mass or s is None or not (s.mass > 0) or s.mass == c.mass:
+        return c
+    f = s.mass / c.mass
+    return replace(c, mass=s.mass, inertia=c.inertia * f,
+                   principal_moments=c.principal_moments * f)
+
+
+@dataclass(frozen=True)
+class Rewrite:
+    """What ``--write`` changed in one link: why it was rewritten, and the stated against the
+    written inertial (mass kg, COM moved m, inertia changed: ‖ΔJ‖₂/‖J_written‖₂)."""
+
+    link: str
+    why: str
+    mass: tuple[float | None, float]
+    com_moved: float | None
+    inertia_changed: float | None
+
+    @classmethod
+    def of(cls, r: LinkReport, w: LinkMass, rtol: float) -> Rewrite:
+        s = r.link.stated
+        if s is None:
+            return cls(r.name, "none stated: added", (None, w.mass), None, None)
+        problems = r.stated_problems()
+        why = (f"invalid ({problems[0]})" if problems else
+               f"off by {r.comparison.worst:.3g} (> {rtol:g})")
+        return cls(r.name, why, (s.mass, w.mass),
+                   float(np.linalg.norm(w.center_of_mass - s.center_of_mass)),
+                   float(np.linalg.norm(w.inertia - s.inertia, 2) / np.linalg.norm(w.inertia, 2)))
+
+    def phrase(self) -> str:
+        """One line: the link, why, and what changed."""
+        if self.mass[0] is None:
+            return f"{self.link}: {self.why}, mass {self.mass[1]:.6g} kg"
+        mass = (f"mass {self.mass[0]:.6g} kg kept" if self.mass[0] == self.mass[1] else
+                f"mass {self.mass[0]:.6g} -> {self.mass[1]:.6g} kg")
+        return (f"{self.link}: {self.why}: {mass}, COM moved {self.com_moved:.3g} m, "
+                f"inertia changed by {self.inertia_changed:.3g}")
 
 
 def load_model(path: str | os.PathLike, *, source: str = "auto",
