@@ -62,6 +62,12 @@ fraction of the link's size outside a facet: the hull's facet planes carry ~1e-1
 round-off and the geometry's poses another few ulps; a COM really outside is outside by the
 geometry's own dimensions."""
 
+SHELL_LIMIT_THICKNESS = 1e-4
+"""A surface that carries its mass (MuJoCo's ``inertia="shell"``, the doctor's ``thin_shell``)
+is integrated as a ``--shell`` wall this fraction of the mesh's size thick, then divided by the
+thickness: the through-thickness and mitre terms are O(thickness²) = 1e-8 of the moments
+(measured 4e-8 against MuJoCo's own shell inertia), far below every tolerance they meet."""
+
 DIAGNOSIS_RTOL = 1e-4
 """The inertia doctor names a cause only when the model it makes of the stated inertial leaves at
 most this relative difference (measured as ``--check`` measures). Descriptions print five to

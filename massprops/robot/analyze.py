@@ -17,6 +17,7 @@ import numpy as np
 from massprops.errors import (
     CheckFailedError,
     MassPropsError,
+    MeshTopologyError,
     RobotModelError,
     UsageError,
     error_message,
@@ -404,7 +405,11 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         try:
             part = integrate_geometry(g, meshes)
         except MassPropsError as exc:
-            return skipped(f"{g.uri or g.kind} (line {g.node.line}): {error_message(exc)}", True)
+            hint = ""
+            if isinstance(exc, MeshTopologyError) and link.source == "collision":
+                hint = "; or --from visual to compute the link from its visual geometry"
+            return skipped(f"{g.uri or g.kind} (line {g.node.line}): {error_message(exc)}{hint}",
+                           True)
         warnings.extend(f"{g.uri}: {w}" for w in part.warnings)
         if part.repairs:
             repaired[g.uri or g.kind] = part.repairs

@@ -6,7 +6,8 @@ placed as `combine` places it, and the link put together with the same masses:
   primitive by its box (what exporters that "approximate by the bounding box" write);
 - ``convex_hull``: each mesh by its convex hull (MuJoCo's ``inertia="convex"``, PhysX/Bullet);
 - ``thin_shell``: each mesh's surface as a thin wall (`massprops.repair.shell` at a thickness
-  of 1e-4 of the mesh's size: the mass on the surface, MuJoCo's ``inertia="shell"``);
+  of `tolerances.SHELL_LIMIT_THICKNESS` of the mesh's size: the mass on the surface, MuJoCo's
+  ``inertia="shell"``);
 - ``mujoco_legacy``: each mesh by MuJoCo's legacy rule (`rules.legacy_mesh_inertia`: every
   face's pyramid volume taken positive, which overcounts a non-convex mesh);
 - ``other_geometry``: the link's other geometry set (visual instead of collision, or back),
@@ -24,6 +25,7 @@ from massprops.inertia import rotate_inertia
 from massprops.robot.inertials.combine import Part, convex_hull
 from massprops.robot.inertials.primitives import PRIMITIVES, box
 from massprops.robot.inertials.rules import legacy_mesh_inertia
+from massprops.tolerances import SHELL_LIMIT_THICKNESS
 
 __all__ = ["SHAPES", "alternative_part"]
 
@@ -35,9 +37,6 @@ SHAPES = {
 }
 """cause -> what the stated inertial is then the inertial of (for the diagnosis' detail)."""
 
-SHELL_THICKNESS_OF_SIZE = 1e-4
-"""thin_shell's wall, as a fraction of the mesh's size: the through-thickness and mitre terms
-are O((T/size)²) = 1e-8 of the moments, far below the diagnosis' residual allowance."""
 
 
 def alternative_part(kind: str, geom, part: Part, meshes) -> Part | None:
@@ -52,7 +51,7 @@ def alternative_part(kind: str, geom, part: Part, meshes) -> Part | None:
         solid = box(*(2 * half))
         return Part(solid.volume, part.center, rotate_inertia(solid.inertia, a), part.lower,
                     part.upper, points=part.points)
-    mesh, _ = meshes.get(geom)
+    mesh = meshes.mesh(geom)
     v = mesh.vertices
     try:
         if kind == "bounding_box":
@@ -69,7 +68,7 @@ def alternative_part(kind: str, geom, part: Part, meshes) -> Part | None:
             from massprops.repair.shell import shell_properties  # deferred: a repair module
 
             size = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0)))
-            p = shell_properties(mesh, SHELL_THICKNESS_OF_SIZE * size, density=1.0).properties
+            p = shell_properties(mesh, SHELL_LIMIT_THICKNESS * size, density=1.0).properties
             volume, com, inertia = p.volume, p.center_of_mass, p.inertia
         else:
             volume, com, inertia = legacy_mesh_inertia(v, mesh.faces)

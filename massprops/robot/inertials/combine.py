@@ -22,6 +22,7 @@ from massprops.mesh import Mesh
 from massprops.robot.doctor.bounds import Bounds, bounds_of, primitive_points
 from massprops.robot.inertials.primitives import PRIMITIVES
 from massprops.robot.model import Geometry
+from massprops.tolerances import SHELL_LIMIT_THICKNESS
 
 __all__ = ["LinkMass", "Part", "combine", "integrate_geometry"]
 
@@ -86,6 +87,7 @@ class MeshCache:
         self.repairs = repairs
         self._store: dict[tuple, tuple] = {}
         self._hulls: dict[int, np.ndarray] = {}
+        self._read: dict[tuple, Mesh] = {}
 
     def hull_points(self, mesh: Mesh) -> np.ndarray:
         """(k, 3) m: the vertices of ``mesh``'s convex hull (all of them if Qhull refuses)."""
@@ -98,15 +100,26 @@ class MeshCache:
                 self._hulls[id(mesh)] = mesh.vertices
         return self._hulls[id(mesh)]
 
+    @staticmethod
+    def _key(geom: Geometry) -> tuple:
+        return (str(geom.path), tuple(geom.scale.tolist())) if geom.path is not None else (
+            id(geom.vertices), tuple(geom.scale.tolist()))
+
     def get(self, geom: Geometry):
         """(mesh with the scale applied, its Inspection at unit density)."""
-        key = (str(geom.path), tuple(geom.scale.tolist())) if geom.path is not None else (
-            id(geom.vertices), tuple(geom.scale.tolist()))
+        key = self._key(geom)
         if key not in self._store:
             self._store[key] = self._load(geom)
         return self._store[key]
 
-    def _load(self, geom: Geometry):
+    def mesh(self, geom: Geometry) -> Mesh:
+        """The mesh as read with the scale applied (no health checks)."""
+        key = self._key(geom)
+        if key not in self._read:
+            self._read[key] = self._scaled(geom)
+        return self._read[key]
+
+    def _scaled(self, geom: Geometry) -> Mesh:
         if geom.vertices is not None and geom.faces is None:
             # MJCF vertex= without face=: MuJoCo's mesh is the convex hull of the points
             mesh = convex_hull(Mesh(np.ascontiguousarray(geom.vertices, dtype=np.float64),
@@ -124,11 +137,15 @@ class MeshCache:
             mesh = mesh.with_vertices(mesh.vertices * scale)
             if np.prod(np.sign(scale)) < 0:  # a mirror turns the surface inside out
                 mesh = mesh.with_faces(np.ascontiguousarray(mesh.faces[:, ::-1]))
+        return mesh
+
+    def _load(self, geom: Geometry):
+        mesh = self.mesh(geom)
         try:
             return mesh, inspect_mesh(mesh, density=1.0, allow_open=self.allow_open,
                                       repairs=self.repairs)
         except MeshTopologyError as exc:
-            if not geom.hull:
+            if geom.rule != "convex":
                 raise
             # the simulator integrates the hull anyway: that is the body it simulates
             hull = convex_hull(mesh)
@@ -143,6 +160,10 @@ def integrate_geometry(geom: Geometry, meshes: MeshCache) -> Part:
     """The geometry at unit density in the link frame. Raises the mesh readers' and health
     checks' errors (MeshFileError, MeshTopologyError, ...) for a mesh that cannot be used."""
     a, t = geom.rotation, geom.translation
+    if geom.kind == "mesh" and geom.rule in ("shell", "legacy"):
+        special = _simulator_rule(geom, meshes)
+        if special is not None:
+            return special
     if geom.kind == "mesh":
         mesh, result = meshes.get(geom)
         p = result.properties
@@ -157,6 +178,42 @@ def integrate_geometry(geom: Geometry, meshes: MeshCache) -> Part:
     half = solid.half_extents(a)
     return Part(solid.volume, np.asarray(t, dtype=np.float64), rotate_inertia(solid.inertia, a),
                 t - half, t + half, points=primitive_points(geom.kind, solid.dims) @ a.T + t)
+
+
+def _simulator_rule(geom: Geometry, meshes: MeshCache) -> Part | None:
+    """A mesh under MuJoCo's ``inertia="shell"`` (always) or ``"legacy"`` (when it is not a
+    closed solid, so that no exact integral exists: MuJoCo's own rule is what it simulates), at
+    unit density in the link frame; None for a legacy mesh the exact integral accepts."""
+    mesh = meshes.mesh(geom)
+    a, t = geom.rotation, geom.translation
+    if geom.rule == "legacy":
+        try:
+            meshes.get(geom)
+            return None
+        except MeshTopologyError as exc:
+            # a cycle otherwise: rules imports LinkMass from here
+            from massprops.robot.inertials.rules import legacy_mesh_inertia
+
+            volume, com, inertia = legacy_mesh_inertia(mesh.vertices, mesh.faces)
+            note = (f"not a closed solid ({str(exc).split(': ', 1)[-1][:80]}...): integrated by "
+                    "MuJoCo's legacy rule (each face's pyramid volume taken positive), what "
+                    "MuJoCo simulates for this mesh")
+            if not volume > 0:
+                raise
+    else:
+        from massprops.repair.shell import shell_properties  # deferred: MJCF shell meshes only
+
+        lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
+        wall = SHELL_LIMIT_THICKNESS * float(np.linalg.norm(hi - lo))
+        p = shell_properties(mesh, wall, density=1.0).properties
+        # per unit *surface* density (MuJoCo's shell density is per m²): divide by the wall
+        volume, com, inertia = p.volume / wall, p.center_of_mass, p.inertia / wall
+        note = ("MuJoCo's inertia=\"shell\": the surface carries the mass (density per m²), "
+                "integrated as a thin wall")
+    lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
+    centre, half = a @ ((lo + hi) / 2) + t, np.abs(a) @ ((hi - lo) / 2)
+    return Part(volume, a @ com + t, rotate_inertia(inertia, a), centre - half, centre + half,
+                (note,), None, meshes.hull_points(mesh) @ a.T + t)
 
 
 def combine(parts: list[Part], masses: list[float], total: float | None = None) -> LinkMass:
