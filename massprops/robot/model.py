@@ -50,7 +50,7 @@ class Geometry:
     rule : how the simulator integrates this mesh (MJCF ``<mesh inertia>``): "exact" (the
         default elsewhere), "convex" (its hull: a mesh that is not a closed solid is then taken
         as its hull, with a warning, instead of being refused), "legacy" (MuJoCo's default: a
-        mesh that is not closed is integrated by `rules.legacy_mesh_inertia`, what MuJoCo
+        mesh that is not closed is integrated by `combine.legacy_mesh_inertia`, what MuJoCo
         simulates, with a warning) or "shell" (the surface carries the mass: ``density`` is
         then per m², integrated by `massprops.repair.shell` in the thin-wall limit).
     node : the element it came from (line numbers).

@@ -8,7 +8,7 @@ placed as `combine` places it, and the link put together with the same masses:
 - ``thin_shell``: each mesh's surface as a thin wall (`massprops.repair.shell` at a thickness
   of `tolerances.SHELL_LIMIT_THICKNESS` of the mesh's size: the mass on the surface, MuJoCo's
   ``inertia="shell"``);
-- ``mujoco_legacy``: each mesh by MuJoCo's legacy rule (`rules.legacy_mesh_inertia`: every
+- ``mujoco_legacy``: each mesh by MuJoCo's legacy rule (`combine.legacy_mesh_inertia`: every
   face's pyramid volume taken positive, which overcounts a non-convex mesh);
 - ``other_geometry``: the link's other geometry set (visual instead of collision, or back),
   supplied by `massprops.robot.analyze`.
@@ -22,9 +22,13 @@ import numpy as np
 
 from massprops.errors import MassPropsError
 from massprops.inertia import rotate_inertia
-from massprops.robot.inertials.combine import Part, convex_hull
+from massprops.robot.inertials.combine import (
+    Part,
+    combine,
+    convex_hull,
+    legacy_mesh_inertia,
+)
 from massprops.robot.inertials.primitives import PRIMITIVES, box
-from massprops.robot.inertials.rules import legacy_mesh_inertia
 from massprops.tolerances import SHELL_LIMIT_THICKNESS
 
 __all__ = ["SHAPES", "alternative_part"]
@@ -83,9 +87,6 @@ def alternative_part(kind: str, geom, part: Part, meshes) -> Part | None:
 def shape_bases(geometries, parts, meshes, split) -> list:
     """`diagnose.Base` for each kind of SHAPES that changes the link: the geometries' parts
     recomputed, put together with ``split(parts) -> (masses, total)`` as the link was."""
-    # deferred: combine imports this package's bounds; the doctor runs after it
-    from massprops.robot.inertials.combine import combine
-
     out = []
     for kind, what in SHAPES.items():
         alt = [alternative_part(kind, g, p, meshes) for g, p in zip(geometries, parts)]

@@ -1,10 +1,12 @@
 """From geometries to a link's mass properties: integrate each solid, place it, add them up.
 
 Each geometry is integrated at unit density in its own frame (meshes by massprops' exact
-integral after the health checks, primitives by their closed forms), then placed in the link
-frame: c_link = A c + t, J_link = A J Aᵀ (`inertia.rotate_inertia`). Several solids add up by the
-parallel-axis theorem about the common centre of mass (`inertia.parallel_axis`). Overlapping
-solids count twice, as in every simulator: the description's geometry is taken as given.
+integral after the health checks, primitives by their closed forms; an MJCF mesh under MuJoCo's
+``shell`` rule, or under its ``legacy`` rule when it is not closed, by that rule:
+`legacy_mesh_inertia`), then placed in the link frame: c_link = A c + t, J_link = A J Aᵀ
+(`inertia.rotate_inertia`). Several solids add up by the parallel-axis theorem about the common
+centre of mass (`inertia.parallel_axis`). Overlapping solids count twice, as in every simulator:
+the description's geometry is taken as given.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from massprops.robot.inertials.primitives import PRIMITIVES
 from massprops.robot.model import Geometry
 from massprops.tolerances import SHELL_LIMIT_THICKNESS
 
-__all__ = ["LinkMass", "Part", "combine", "integrate_geometry"]
+__all__ = ["LinkMass", "Part", "combine", "integrate_geometry", "legacy_mesh_inertia"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -191,9 +193,6 @@ def _simulator_rule(geom: Geometry, meshes: MeshCache) -> Part | None:
             meshes.get(geom)
             return None
         except MeshTopologyError as exc:
-            # a cycle otherwise: rules imports LinkMass from here
-            from massprops.robot.inertials.rules import legacy_mesh_inertia
-
             volume, com, inertia = legacy_mesh_inertia(mesh.vertices, mesh.faces)
             note = (f"not a closed solid ({str(exc).split(': ', 1)[-1][:80]}...): integrated by "
                     "MuJoCo's legacy rule (each face's pyramid volume taken positive), what "
@@ -255,3 +254,35 @@ def convex_hull(mesh: Mesh) -> Mesh:
     return Mesh(np.ascontiguousarray(v[used]),
                 np.ascontiguousarray(inverse.reshape(-1, 3).astype(np.int64)),
                 name=f"{mesh.name} (convex hull)")
+
+
+def legacy_mesh_inertia(vertices: np.ndarray, faces: np.ndarray
+                        ) -> tuple[float, np.ndarray, np.ndarray]:
+    """MuJoCo's ``inertia="legacy"`` mesh rule (the default of ``<mesh>``; user_mesh.cc), per
+    unit density in the mesh frame: (volume m³, centre of mass (3,) m, inertia (3, 3) m⁵ about
+    it).
+
+    It integrates the mesh's own faces, not its hull: each face f spans a pyramid to a reference
+    point, and the pyramid's volume is taken *positive*, |(c_f − p)·n_f| A_f / 3, whichever way
+    the face points. The COM is the volume-weighted mean of the pyramids' centroids to p = the
+    surface's area-weighted centroid; the volume and the second moments are then summed over the
+    pyramids to that COM (tetrahedra (COM, a, b, c), ∫ x xᵀ dV = V/20 (Σ a aᵀ + s sᵀ), s = a+b+c),
+    and the inertia is taken about the COM as it stands. For a convex mesh seen from inside the
+    pyramids do not overlap and this is the exact integral; for a non-convex one a face seen
+    from behind adds volume where the exact rule subtracts it, so it overcounts (more mass far
+    out: larger moments)."""
+    v = np.asarray(vertices, dtype=np.float64)
+    tri = v[np.asarray(faces, dtype=np.int64)]
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    cross = np.cross(b - a, c - a)          # 2 A n
+    centre = (a + b + c) / 3
+    area2 = np.linalg.norm(cross, axis=1)
+    facecen = (area2 @ centre) / area2.sum()
+    vol = np.abs(np.einsum("ij,ij->i", centre - facecen, cross)) / 6
+    com = (vol @ (0.75 * centre + 0.25 * facecen)) / vol.sum()
+    a, b, c = a - com, b - com, c - com
+    vol = np.abs(np.einsum("ij,ij->i", (a + b + c) / 3, np.cross(b - a, c - a))) / 6
+    s = a + b + c
+    second = sum(np.einsum("i,ij,ik->jk", vol / 20, p, p) for p in (a, b, c, s))
+    inertia = np.trace(second) * np.eye(3) - second
+    return float(vol.sum()), com, inertia

@@ -9,9 +9,6 @@ scale it) and each of its principal moments to at least
 by settotalmass / (the sum of the bounded masses). The factor is one number for the model, so
 its sum counts a body that has neither geometry nor inertial at ``boundmass`` (what MuJoCo gives
 it) although such a body is not reported as computed.
-
-`legacy_mesh_inertia` is MuJoCo's legacy mesh rule, which the inertia doctor tries as a cause
-(``mujoco_legacy``).
 """
 
 from __future__ import annotations
@@ -24,7 +21,7 @@ from massprops.inertia import principal_axes
 from massprops.robot.inertials.combine import LinkMass
 from massprops.robot.model import MassRules, StatedInertial
 
-__all__ = ["apply_rules", "legacy_mesh_inertia"]
+__all__ = ["apply_rules"]
 
 
 def apply_rules(reports: list, rules: MassRules) -> tuple[list, str | None]:
@@ -111,34 +108,3 @@ def _scaled(c: LinkMass, factor: float) -> LinkMass:
     return replace(c, mass=c.mass * factor, inertia=inertia,
                    principal_moments=c.principal_moments * factor)
 
-
-def legacy_mesh_inertia(vertices: np.ndarray, faces: np.ndarray
-                        ) -> tuple[float, np.ndarray, np.ndarray]:
-    """MuJoCo's ``inertia="legacy"`` mesh rule (the default of ``<mesh>``; user_mesh.cc), per
-    unit density in the mesh frame: (volume m³, centre of mass (3,) m, inertia (3, 3) m⁵ about
-    it).
-
-    It integrates the mesh's own faces, not its hull: each face f spans a pyramid to a reference
-    point, and the pyramid's volume is taken *positive*, |(c_f − p)·n_f| A_f / 3, whichever way
-    the face points. The COM is the volume-weighted mean of the pyramids' centroids to p = the
-    surface's area-weighted centroid; the volume and the second moments are then summed over the
-    pyramids to that COM (tetrahedra (COM, a, b, c), ∫ x xᵀ dV = V/20 (Σ a aᵀ + s sᵀ), s = a+b+c),
-    and the inertia is taken about the COM as it stands. For a convex mesh seen from inside the
-    pyramids do not overlap and this is the exact integral; for a non-convex one a face seen
-    from behind adds volume where the exact rule subtracts it, so it overcounts (more mass far
-    out: larger moments)."""
-    v = np.asarray(vertices, dtype=np.float64)
-    tri = v[np.asarray(faces, dtype=np.int64)]
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    cross = np.cross(b - a, c - a)          # 2 A n
-    centre = (a + b + c) / 3
-    area2 = np.linalg.norm(cross, axis=1)
-    facecen = (area2 @ centre) / area2.sum()
-    vol = np.abs(np.einsum("ij,ij->i", centre - facecen, cross)) / 6
-    com = (vol @ (0.75 * centre + 0.25 * facecen)) / vol.sum()
-    a, b, c = a - com, b - com, c - com
-    vol = np.abs(np.einsum("ij,ij->i", (a + b + c) / 3, np.cross(b - a, c - a))) / 6
-    s = a + b + c
-    second = sum(np.einsum("i,ij,ik->jk", vol / 20, p, p) for p in (a, b, c, s))
-    inertia = np.trace(second) * np.eye(3) - second
-    return float(vol.sum()), com, inertia
