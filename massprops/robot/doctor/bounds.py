@@ -5,8 +5,9 @@ Points: a mesh's own vertices (scaled and posed); a primitive's circumscribing p
 sphere's subdivided icosahedron, a circle's 48-gon, each pushed out until its faces clear the
 curved surface), so the hull of the points contains the solid exactly, never less. The
 ellipsoid is the minimum-volume one around the points (Khachiyan's iteration, a few hundred
-steps), then grown until every point is inside: any ellipsoid that contains the geometry makes
-`validity`'s realizability test a valid necessary condition; a tighter one makes it sharper.
+steps, on at most `ELLIPSOID_POINTS` of them), then grown until every point is inside: any
+ellipsoid that contains the geometry makes `validity`'s realizability test a valid necessary
+condition; a tighter one makes it sharper.
 """
 
 from __future__ import annotations
@@ -107,12 +108,30 @@ def bounds_of(points: np.ndarray) -> Bounds | None:
         return None
     p = p[hull.vertices]
     centre, shape = _ellipsoid(p)
+    if not (np.isfinite(shape).all() and np.linalg.eigvalsh(shape)[0] > 0):
+        return None  # no volume to speak of: nothing to judge against
     size = float(np.linalg.norm(p.max(axis=0) - p.min(axis=0)))
     return Bounds(p, hull.equations[:, :3], -hull.equations[:, 3], centre, shape, size)
 
 
-def _ellipsoid(p: np.ndarray, steps: int = 400) -> tuple[np.ndarray, np.ndarray]:
-    """Khachiyan's minimum-volume enclosing ellipsoid, then grown to contain every point."""
+ELLIPSOID_POINTS = 2000
+"""Khachiyan's iteration runs on at most this many of the hull's vertices (every k-th): its cost
+is steps × points, and the ellipsoid is grown afterwards to hold every vertex, so a subsample
+only makes it a little looser (the test stays valid, a little less sharp)."""
+
+
+def _ellipsoid(all_points: np.ndarray, steps: int = 400) -> tuple[np.ndarray, np.ndarray]:
+    """Khachiyan's minimum-volume enclosing ellipsoid, then grown to contain every point; on
+    every k-th point, or on all of them when that subsample spans no volume (a regular mesh
+    whose hull vertices come in rings)."""
+    sub = all_points[::-(-len(all_points) // ELLIPSOID_POINTS)]
+    spread = np.linalg.eigvalsh(np.cov(sub.T)) if len(sub) > 3 else np.zeros(3)
+    if not spread[0] > 1e-12 * spread[2]:
+        sub = all_points
+    return _khachiyan(sub, all_points, steps)
+
+
+def _khachiyan(p: np.ndarray, all_points: np.ndarray, steps: int):
     n = len(p)
     q = np.column_stack([p, np.ones(n)]).T
     u = np.full(n, 1.0 / n)
@@ -127,7 +146,7 @@ def _ellipsoid(p: np.ndarray, steps: int = 400) -> tuple[np.ndarray, np.ndarray]
         u[j] += step
     centre = u @ p
     d = p - centre
-    cov = (d.T * u) @ d
-    shape = 3.0 * cov
+    shape = 3.0 * ((d.T * u) @ d)
+    d = all_points - centre
     reach = float(np.max(np.einsum("ij,ij->i", d, np.linalg.solve(shape, d.T).T)))
     return centre, shape * reach
