@@ -113,3 +113,6 @@ def test_a_computed_inertial_with_negative_density_is_not_valid(tmp_path, run):
     assert any("partly outside every solid part" in w for w in row["warnings"])
     assert row["valid"] == {"positive_definite": True, "triangle": True, "com_inside": True,
                             "realizable": True}
+    table = run("model", tmp_path / "r.urdf").stdout
+    assert ("wrist: computed inertial not valid, never written: inertia is not positive "
+            "definite") in " ".join(table.split())
