@@ -46,12 +46,34 @@ merges real features of a small part and misses the cracks of a large one. The w
 too: only groups no wider than the tolerance are welded, and only if that leaves no open edge."""
 
 INERTIA_VALIDITY_RTOL = 1e-12
-"""A stated inertia tensor counts as physically valid when it is symmetric, its smallest principal
-moment is positive, and each principal moment is at most the sum of the other two, each within
-this fraction of the largest moment. Writers print floats in repr, so a tensor massprops wrote
-comes back exact; 1e-12 leaves room for a tensor that was rounded to ~12 digits by another tool
-(a thin rod or disc sits exactly on the triangle inequality's edge) while a placeholder that
-breaks it does so by percent."""
+"""A stated or computed inertial counts as physically valid when its tensor is symmetric, its
+smallest principal moment is positive, and each principal moment is at most the sum of the other
+two, each within this fraction of the largest moment (`robot.doctor.validity`; the
+realizability trace within this fraction of the mass). It is round-off: each shift by the
+parallel-axis rule or turn of the axes adds ~eps (|d|/size)² of the largest moment, so a tensor
+on the triangle's edge (a thin plate, I3 = I1 + I2) shifted to points a body length away and
+turned a few times stays within 1e-13 (tested, `tests/test_robot_doctor_valid.py`); a tensor
+rounded to ~12 digits by another tool is within 1e-12; a placeholder that breaks it does so by
+percent."""
+
+COM_INSIDE_RTOL = 1e-9
+"""A centre of mass counts as inside the link geometry's convex hull when it is at most this
+fraction of the link's size outside a facet: the hull's facet planes carry ~1e-15 of the size of
+round-off and the geometry's poses another few ulps; a COM really outside is outside by the
+geometry's own dimensions."""
+
+SHELL_LIMIT_THICKNESS = 1e-4
+"""A surface that carries its mass (MuJoCo's ``inertia="shell"``, the doctor's ``thin_shell``)
+is integrated as a ``--shell`` wall this fraction of the mesh's size thick, then divided by the
+thickness: the through-thickness and mitre terms are O(thickness²) = 1e-8 of the moments
+(measured 4e-8 against MuJoCo's own shell inertia), far below every tolerance they meet."""
+
+DIAGNOSIS_RTOL = 1e-4
+"""The inertia doctor names a cause only when the model it makes of the stated inertial leaves at
+most this relative difference (measured as ``--check`` measures). Descriptions print five to
+eight significant digits (rounding ≤ 5e-6 of each number) and meshes exported twice differ by
+~1e-6; the causes themselves move the numbers by percent or by factors (a unit is 1e3 to 1e6, a
+bounding box or a hull percent), so 1e-4 separates them from rounding with room on both sides."""
 
 WRITE_KEEP_RTOL = 1e-12
 """``model --write`` without ``--check``: a stated inertial within this of the computed one

@@ -173,12 +173,14 @@ def _box_mesh_files(folder, open_mesh):
                                      + tris.astype("<i4").tobytes())
 
 
-@pytest.mark.parametrize("inertia, expect", [("legacy", "hull"), ("convex", "hull"),
+@pytest.mark.parametrize("inertia, expect", [("legacy", "legacy"), ("convex", "hull"),
                                              ("exact", "refused")])
-def test_open_mesh_in_mjcf_takes_the_hull_mujoco_integrates(tmp_path, inertia, expect):
-    """An open box (bottom missing) under MuJoCo's default mesh inertia is the box MuJoCo
-    simulates (its convex hull): V = 0.006, COM at the centre; with inertia="exact" MuJoCo
-    needs a closed mesh too, so it is refused."""
+def test_open_mesh_in_mjcf_takes_the_body_mujoco_simulates(tmp_path, inertia, expect):
+    """An open box (bottom missing) with inertia="convex" is the box MuJoCo simulates (its
+    convex hull): V = 0.006, COM at the centre; under the default "legacy" MuJoCo integrates the
+    five faces' pyramids from their centroid, volumes taken positive (issue 32.4: not the hull),
+    checked against MuJoCo's own compiled body; with inertia="exact" MuJoCo needs a closed mesh
+    too, so it is refused."""
     _box_mesh_files(tmp_path, open_mesh=True)
     f = tmp_path / "m.xml"
     f.write_text(f'<mujoco><asset><mesh name="b" file="box.obj" inertia="{inertia}"/></asset>'
@@ -189,6 +191,13 @@ def test_open_mesh_in_mjcf_takes_the_hull_mujoco_integrates(tmp_path, inertia, e
         assert r.status == "skipped" and r.error and "not closed" in r.reason
         return
     assert r.status == "computed"
+    if expect == "legacy":
+        mujoco = pytest.importorskip("mujoco")
+        compiled = mujoco.MjModel.from_xml_path(str(f))
+        assert r.computed.volume == pytest.approx(compiled.body_mass[1] / 1000, rel=1e-6)
+        assert r.computed.center_of_mass == pytest.approx(compiled.body_ipos[1], rel=1e-6)
+        assert any("MuJoCo's legacy rule" in w for w in r.warnings)
+        return
     assert r.computed.volume == pytest.approx(0.006, rel=1e-14)
     assert r.computed.center_of_mass == pytest.approx([0.05, 0.1, 0.15], rel=1e-14)
     assert any("convex hull" in w for w in r.warnings)

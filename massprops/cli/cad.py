@@ -11,6 +11,7 @@ from massprops.cli.common import (
     ELEMENT_FORMATS,
     StdoutClosed,
     check_outputs,
+    element_comment,
     emit_json,
     guarded,
     say_warning,
@@ -78,7 +79,10 @@ def _show(result: Any, out_format: str, principal: bool) -> None:
 
         for solid in result.solids:
             com, inertia = local_inertial(solid)
-            click.echo(f"<!-- {result.file.name}: {solid.solid.path} (its own frame) -->")
+            comment = element_comment(out_format,
+                                      f"{result.file.name}: {solid.solid.path} (its own frame)")
+            if comment is not None:
+                click.echo(comment)
             click.echo(WRITERS[out_format](solid.properties.mass, com, inertia,
                                            principal=principal))
     else:

@@ -21,9 +21,15 @@ UNIT_CHOICES = ("m", "cm", "mm", "um", "in", "ft")
 readers (tests/test_cli.py checks the two agree)."""
 
 
-ELEMENT_FORMATS = ("urdf", "sdf", "mjcf")
+ELEMENT_FORMATS = ("urdf", "sdf", "mjcf", "gltf", "usd")
 """The keys of massprops.robot.elements.WRITERS, written out so that ``inspect`` never imports
 the robot package to build its options (tests/test_robot_cli.py checks the two agree)."""
+
+
+def element_comment(fmt: str, text: str) -> str | None:
+    """The line naming the file above a format's element: an XML comment, a usda ``#``
+    comment, none for glTF (one JSON object per line, which has no comments)."""
+    return {"gltf": None, "usd": f"# {text}"}.get(fmt, f"<!-- {text} -->")
 
 
 INSPECT_FORMATS = ("table", "json", "csv", *ELEMENT_FORMATS)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import sys
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import click
@@ -16,6 +17,7 @@ from massprops.cli.common import (
     INSPECT_FORMATS,
     StdoutClosed,
     cli_text,
+    element_comment,
     emit_json,
     guarded,
     inspect_kwargs,
@@ -37,7 +39,9 @@ from massprops.errors import UsageError, error_message, exit_code
               show_default=True,
               help="table: for people; json (= --json): one object per line; csv: a header and "
                    "one row per mesh (columns in the README); urdf/sdf/mjcf: the format's "
-                   "<inertial> element per mesh (about the COM, mesh axes, round-trip digits).")
+                   "<inertial> element per mesh (about the COM, mesh axes, round-trip digits); "
+                   "gltf: the KHR_physics_rigid_bodies motion per mesh (JSON lines); usd: a "
+                   "usda prim with PhysicsMassAPI per mesh (both principal moments and axes).")
 @click.option("--principal", is_flag=True,
               help="With --format mjcf: quat + diaginertia instead of fullinertia.")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,
@@ -265,9 +269,12 @@ def _show_record(ctx: click.Context, record: Any, out_format: str, principal: bo
             from massprops.robot.write.elements import WRITERS
 
             d = record.data
-            to_stdout(lambda: click.echo(f"<!-- {record.file} -->"))
+            comment = element_comment(out_format, str(record.file))
+            if comment is not None:
+                to_stdout(lambda: click.echo(comment))
+            named = {"name": Path(str(record.file)).stem} if out_format == "usd" else {}
             element = WRITERS[out_format](d["mass"], d["center_of_mass"], d["inertia"],
-                                          principal=principal)
+                                          principal=principal, **named)
             to_stdout(lambda: click.echo(element))
         else:
             # deferred: rich loads only for human-readable output

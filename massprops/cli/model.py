@@ -32,6 +32,11 @@ from massprops.cli.common import (
                    "computed ones (missing, invalid, or off by more than --check RTOL, default "
                    "1e-12); every other byte as in FILE (never over FILE).")
 @click.option("--force", is_flag=True, help="Replace OUT if it exists (never FILE).")
+@click.option("--keep-mass", is_flag=True,
+              help="With --write: keep each stated mass, with the geometry's distribution "
+                   "(COM, and the tensor scaled to that mass).")
+@click.option("--only-invalid", is_flag=True,
+              help="With --write: replace only the inertials that fail a validity test.")
 @click.option("--from", "source", type=click.Choice(("collision", "visual")), default=None,
               help="Which geometry makes every link (default: collision, or visual for a link "
                    "with no collision geometry, noted as source: visual).")
@@ -42,7 +47,8 @@ from massprops.cli.common import (
 @repair_flags
 @click.pass_context
 def model(ctx: click.Context, description: str, as_json: bool, rtol: float | None,
-          output_path: str | None, force: bool, source: str | None, density: float | None,
+          output_path: str | None, force: bool, keep_mass: bool, only_invalid: bool,
+          source: str | None, density: float | None,
           package_paths: tuple[str, ...], allow_open: bool, fill_holes: bool,
           max_hole: float | None, union: bool, shell: float | None,
           xacro_args: dict[str, str]) -> None:
@@ -53,15 +59,21 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
 
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
+        from massprops.errors import UsageError, setting_ref
         from massprops.robot.analyze import analyze_model
         from massprops.robot.write.writeback import description_output
+
+        for flag, on in (("keep_mass", keep_mass), ("only_invalid", only_invalid)):
+            if on and output_path is None:
+                raise UsageError(f"{setting_ref(flag)} changes what {setting_ref('write')} "
+                                 f"writes; give {setting_ref('write')} OUT")
 
         check_outputs([(output_path, description_output(description))], force=force,
                       inputs=[description])
 
         report = analyze_model(description, source=source or "auto", density=density,
                                package_paths=package_paths, allow_open=allow_open,
-                               xacro_args=xacro_args, repairs=repairs)
+                               xacro_args=xacro_args, repairs=repairs, check=rtol)
         for w in report.model.warnings:
             say_warning(description, w)
         for line in report.errors:
@@ -76,8 +88,12 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
 
             print_model(report, rtol)
         if output_path is not None:
-            written = report.write(output_path, force=force, rtol=rtol)
-            say_note(_rewritten(output_path, written, report, rtol))
+            changes = report.write(output_path, force=force, rtol=rtol, keep_mass=keep_mass,
+                                   only_invalid=only_invalid)
+            say_note(_rewritten(output_path, tuple(c.link for c in changes), report, rtol,
+                                only_invalid))
+            for c in changes:
+                say_note(f"  {c.phrase()}")
         if rtol is not None:
             report.require_agreement(rtol)
 
@@ -85,15 +101,20 @@ def model(ctx: click.Context, description: str, as_json: bool, rtol: float | Non
     ctx.exit(max(code, 1 if link_errors else 0))
 
 
-def _rewritten(output_path: str, written: tuple[str, ...], report, rtol: float | None) -> str:
-    """The note --write leaves on stderr: which links' inertials OUT has new."""
+def _rewritten(output_path: str, written: tuple[str, ...], report, rtol: float | None,
+               only_invalid: bool = False) -> str:
+    """The note --write leaves on stderr: which links' inertials OUT has new (each link's
+    changes follow, one note each)."""
     from massprops.tolerances import WRITE_KEEP_RTOL  # the default, said with the note
 
     computed = sum(r.computed is not None for r in report.links)
-    within = f"within {WRITE_KEEP_RTOL if rtol is None else rtol:g} of the geometry"
+    within = ("valid (--only-invalid)" if only_invalid else
+              f"within {WRITE_KEEP_RTOL if rtol is None else rtol:g} of the geometry")
     if not written:
-        return f"wrote {output_path}: every computed inertial agrees {within}; none rewritten"
+        return (f"wrote {output_path}: every computed inertial "
+                f"{'is' if only_invalid else 'agrees'} {within}; none rewritten")
     kept = computed - len(written)
     return (f"wrote {output_path}: rewrote the inertial of {', '.join(written)} "
             f"({len(written)} of {computed} computed link(s)"
-            + (f"; the other {kept} agree {within} and are kept)" if kept else ")"))
+            + (f"; the other {kept} {'are' if only_invalid else 'agree'} {within} and are kept)"
+               if kept else ")"))

@@ -124,7 +124,9 @@ def fill_holes(mesh: Mesh, *, max_fraction: float | None = None,
         if tri is None:
             problem = (f"{where} ({loop.ids.size} edges, length {length:.6g} m) crosses itself "
                        f"seen from every side and has more than {MAX_DP_POINTS} points: no cap "
-                       f"we could defend")
+                       f"we could defend; use {setting_ref('shell')} THICKNESS for a "
+                       f"thin-walled or open part, or {setting_ref('allow_open')} to compute "
+                       "anyway")
         else:
             area = float(_areas(points, tri).sum())
             problem = None

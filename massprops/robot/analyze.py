@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -17,15 +17,19 @@ import numpy as np
 from massprops.errors import (
     CheckFailedError,
     MassPropsError,
+    MeshTopologyError,
     RobotModelError,
     UsageError,
     error_message,
     setting_ref,
 )
+from massprops.robot.doctor.diagnose import Diagnosis, diagnose
+from massprops.robot.doctor.shapes import shape_bases
+from massprops.robot.doctor.validity import Validity, judge
 from massprops.robot.formats.xacro_run import EXPANDED, expand_xacro, has_xacro, is_xacro
 from massprops.robot.formats.xmltree import parse_xml, parse_xml_bytes
 from massprops.robot.inertials.combine import LinkMass, MeshCache, combine, integrate_geometry
-from massprops.robot.inertials.compare import Comparison, compare, validity_problems
+from massprops.robot.inertials.compare import Comparison, compare, relative_difference
 from massprops.robot.model import Link, RobotModel
 from massprops.tolerances import WRITE_KEEP_RTOL
 
@@ -44,7 +48,10 @@ class LinkReport:
     reported as it is) or "skipped"; ``reason`` why not computed; ``error`` True when the
     skip means an input could not be processed (a missing or unreadable mesh), False for a link
     that simply has nothing to compute (no geometry, a frame link). ``repairs``: mesh reference
-    -> its ``repairs`` object, for the meshes a repair changed (None: none did)."""
+    -> its ``repairs`` object, for the meshes a repair changed (None: none did). ``shapes``:
+    the link's other shapes for the doctor (`doctor.shapes.shape_bases`), computed on demand.
+    ``checked``: a ``--check`` ran (the row then has "diagnosis"); ``diagnosis``: why the
+    stated inertial differs by more than its RTOL (`doctor.diagnose`), else None."""
 
     link: Link
     status: str
@@ -54,28 +61,54 @@ class LinkReport:
     comparison: Comparison | None
     warnings: tuple[str, ...]
     repairs: dict | None = None
+    shapes: Callable[[], list] | None = field(default=None, repr=False)
+    checked: bool = False
+    diagnosis: Diagnosis | None = None
 
     @property
     def name(self) -> str:
         return self.link.name
 
-    def stated_problems(self) -> tuple[str, ...]:
+    def stated_validity(self) -> Validity | None:
+        """The stated inertial's `doctor.validity` tests (against the geometry when there is
+        some), or None when nothing is stated."""
         s = self.link.stated
-        return () if s is None else validity_problems(s.mass, s.inertia)
+        if s is None:
+            return None
+        if self.comparison is not None and self.comparison.valid is not None:
+            return self.comparison.valid
+        return judge(s.mass, s.center_of_mass, s.inertia, None)
+
+    def computed_validity(self) -> Validity | None:
+        """The computed inertial's tests (an open mesh counted with signed volumes can fail
+        them), or None when nothing was computed."""
+        c = self.computed
+        return None if c is None else judge(c.mass, c.center_of_mass, c.inertia, c.bounds)
+
+    def stated_problems(self) -> tuple[str, ...]:
+        v = self.stated_validity()
+        return () if v is None else v.problems
 
     def as_dict(self, model: str) -> dict:
         """The contract's JSON object for this link, plus "line", "comparison", "source" (which
         geometry made it) and, where a repair changed a mesh, "repairs" (mesh -> record)."""
         s = self.link.stated
+        valid = self.stated_validity()
         stated = None if s is None else {
             "mass": s.mass, "center_of_mass": s.center_of_mass.tolist(),
-            "inertia": s.inertia.tolist(), "valid": not self.stated_problems()}
+            "inertia": s.inertia.tolist(), "valid": valid.ok}
+        computed = None
+        if self.computed is not None:
+            computed = {**self.computed.as_dict(), "valid": self.computed_validity().as_dict()}
         return {"model": model, "link": self.name, "line": self.link.node.line,
                 "status": self.status, "reason": self.reason, "stated": stated,
-                "computed": None if self.computed is None else self.computed.as_dict(),
+                **({"valid": valid.as_dict()} if valid is not None else {}),
+                "computed": computed,
                 "comparison": None if self.comparison is None else self.comparison.as_dict(),
                 "source": self.link.source if self.link.geometries else None,
                 **({"repairs": self.repairs} if self.repairs else {}),
+                **({"diagnosis": None if self.diagnosis is None else self.diagnosis.as_dict()}
+                   if self.checked else {}),
                 "warnings": list(self.warnings)}
 
 
@@ -123,25 +156,42 @@ class ModelReport:
                 f"{self.name}: {len(bad)} link(s) differ from their geometry by more than "
                 f"{rtol:g}: {'; '.join(bad)}; fix the inertials (massprops model --write OUT)")
 
-    def to_rewrite(self, rtol: float | None = None) -> list[LinkReport]:
+    def to_rewrite(self, rtol: float | None = None, *,
+                   only_invalid: bool = False) -> list[LinkReport]:
         """The computed links whose inertial is off: none stated, or not physically valid, or
         differing from the computed one by more than ``rtol`` (default WRITE_KEEP_RTOL:
-        round-off); the others are kept as written."""
+        round-off); with ``only_invalid``, only those whose stated inertial fails a validity
+        test. A link whose computed inertial fails one is never chosen (nothing better to
+        write); the others are kept as written."""
         keep = WRITE_KEEP_RTOL if rtol is None else rtol
-        return [r for r in self.links if r.computed is not None and (
-            r.link.stated is None or r.stated_problems() or r.comparison is None
-            or r.comparison.worst > keep)]
+        chosen = []
+        for r in self.links:
+            if r.computed is None or not r.computed_validity().ok:
+                continue
+            invalid = bool(r.stated_problems())
+            if only_invalid:
+                off = invalid
+            else:
+                off = (r.link.stated is None or invalid or r.comparison is None
+                       or r.comparison.worst > keep)
+            if off:
+                chosen.append(r)
+        return chosen
 
     def write(self, out: str | os.PathLike, *, force: bool = False,
-              rtol: float | None = None) -> tuple[str, ...]:
+              rtol: float | None = None, keep_mass: bool = False,
+              only_invalid: bool = False) -> tuple[Rewrite, ...]:
         """Write the description with the inertial of every link that is off (`to_rewrite`)
-        replaced, or added where it has none; every other byte as read. Returns the names of
-        the links rewritten. Atomic, never over the input."""
+        replaced, or added where it has none; every other byte as read. ``keep_mass``: the
+        stated mass with the geometry's distribution (COM, and the tensor scaled to that mass;
+        a link with no stated mass gets the computed one). Returns what changed, per link
+        rewritten. Atomic, never over the input."""
         # deferred: a description loads only its own format's parser
         from massprops.robot.write.writeback import edited_bytes, write_description
 
-        chosen = self.to_rewrite(rtol)
-        edits = [(r.link.node, r.link.inertial_node, r.computed) for r in chosen]
+        chosen = self.to_rewrite(rtol, only_invalid=only_invalid)
+        written = [_written(r, keep_mass) for r in chosen]
+        edits = [(r.link.node, r.link.inertial_node, w) for r, w in zip(chosen, written)]
         own = (self.model.path, Path(f"{self.model.path}{EXPANDED}"))
         elsewhere = [r.name for r in chosen
                      if r.link.node.file is not None and r.link.node.file not in own]
@@ -152,7 +202,52 @@ class ModelReport:
                              "compiled model (mujoco.mj_saveLastXML) first")
         data = edited_bytes(self.model.data, self.model.format, edits)
         write_description(data, out, source=self.model.path, force=force)
-        return tuple(r.name for r in chosen)
+        keep = WRITE_KEEP_RTOL if rtol is None else rtol
+        return tuple(Rewrite.of(r, w, keep) for r, w in zip(chosen, written))
+
+
+def _written(r: LinkReport, keep_mass: bool) -> LinkMass:
+    """What ``--write`` puts in link ``r``: the computed inertial, or with ``keep_mass`` the
+    stated mass and the computed distribution (COM as computed, tensor × m_stated / m)."""
+    c, s = r.computed, r.link.stated
+    if not keep_mass or s is None or not (s.mass > 0) or s.mass == c.mass:
+        return c
+    f = s.mass / c.mass
+    return replace(c, mass=s.mass, inertia=c.inertia * f,
+                   principal_moments=c.principal_moments * f)
+
+
+@dataclass(frozen=True)
+class Rewrite:
+    """What ``--write`` changed in one link: why it was rewritten, and the stated against the
+    written inertial (mass kg, COM moved m, inertia changed: ‖ΔJ‖₂/‖J_written‖₂)."""
+
+    link: str
+    why: str
+    mass: tuple[float | None, float]
+    com_moved: float | None
+    inertia_changed: float | None
+
+    @classmethod
+    def of(cls, r: LinkReport, w: LinkMass, rtol: float) -> Rewrite:
+        s = r.link.stated
+        if s is None:
+            return cls(r.name, "none stated: added", (None, w.mass), None, None)
+        problems = r.stated_problems()
+        why = (f"invalid ({problems[0]})" if problems else
+               f"off by {r.comparison.worst:.3g} (> {rtol:g})")
+        return cls(r.name, why, (s.mass, w.mass),
+                   float(np.linalg.norm(w.center_of_mass - s.center_of_mass)),
+                   float(np.linalg.norm(w.inertia - s.inertia, 2) / np.linalg.norm(w.inertia, 2)))
+
+    def phrase(self) -> str:
+        """One line: the link, why, and what changed."""
+        if self.mass[0] is None:
+            return f"{self.link}: {self.why}, mass {self.mass[1]:.6g} kg"
+        mass = (f"mass {self.mass[0]:.6g} kg kept" if self.mass[0] == self.mass[1] else
+                f"mass {self.mass[0]:.6g} -> {self.mass[1]:.6g} kg")
+        return (f"{self.link}: {self.why}: {mass}, COM moved {self.com_moved:.3g} m, "
+                f"inertia changed by {self.inertia_changed:.3g}")
 
 
 def load_model(path: str | os.PathLike, *, source: str = "auto",
@@ -207,7 +302,7 @@ def analyze_model(path: str | os.PathLike, *, source: str = "auto",
                   package_paths: Sequence[str | os.PathLike] = (),
                   allow_open: bool = False,
                   xacro_args: Mapping[str, str] | None = None,
-                  repairs=None) -> ModelReport:
+                  repairs=None, check: float | None = None) -> ModelReport:
     """Every link of the description at ``path``: its geometry integrated, against its stated
     inertial.
 
@@ -215,6 +310,8 @@ def analyze_model(path: str | os.PathLike, *, source: str = "auto",
         "visual" (MJCF: see mjcf.py; auto is collision there, MuJoCo's mass geoms).
     repairs : a `massprops.repair.RepairOptions` applied to every mesh (per mesh, reported
         per link), or None.
+    check : RTOL of ``--check``: every link whose stated inertial differs by more gets a
+        `doctor.diagnose.Diagnosis` (the others None); None: no diagnosis.
     density : kg/m³ for every geometry; default: keep each link's stated mass (the density
         follows from its geometry's volume); MJCF bodies without an inertial use their geoms'
         own density/mass (MuJoCo's rule); URDF/SDF links without a stated mass are skipped.
@@ -232,7 +329,55 @@ def analyze_model(path: str | os.PathLike, *, source: str = "auto",
         reports, note = apply_rules(reports, model.rules)
         if note:
             model = replace(model, warnings=model.warnings + (note,))
+    if check is not None:
+        if not (math.isfinite(check) and check >= 0):
+            raise UsageError(f"{setting_ref('check')} needs a tolerance >= 0, got {check!r}")
+        other = _OtherGeometry(path, model, meshes, density, package_paths, xacro_args)
+        reports = [replace(r, checked=True, diagnosis=_diagnosis(r, check, other))
+                   for r in reports]
     return ModelReport(model, str(path), tuple(reports))
+
+
+def _diagnosis(r: LinkReport, rtol: float, other: _OtherGeometry) -> Diagnosis | None:
+    """Why link ``r``'s stated inertial differs by more than ``rtol``, or None if it does not."""
+    if r.comparison is None or r.comparison.worst <= rtol:
+        return None
+
+    def shapes() -> list:
+        bases = r.shapes() if r.shapes is not None else []
+        return bases + other.bases(r)
+
+    return diagnose(r.link.stated, r.computed, shapes, relative_difference)
+
+
+class _OtherGeometry:
+    """The links computed from the other geometry set (visual for collision, and back), read on
+    the first link that asks: the doctor's ``other_geometry``."""
+
+    def __init__(self, path, model, meshes, density, package_paths, xacro_args) -> None:
+        self.args = (path, package_paths, xacro_args)
+        self.model, self.meshes, self.density = model, meshes, density
+        self._links: dict[str, dict] = {}
+
+    def bases(self, r: LinkReport) -> list:
+        other = "visual" if r.link.source == "collision" else "collision"
+        if other not in self._links:
+            path, package_paths, xacro_args = self.args
+            try:
+                model = load_model(path, source=other, package_paths=package_paths,
+                                   xacro_args=xacro_args)
+                self._links[other] = {link.name: link for link in model.links}
+            except MassPropsError:
+                self._links[other] = {}
+        link = self._links[other].get(r.name)
+        if link is None or not link.geometries or link.source != other:
+            return []
+        o = _link(link, self.model, self.meshes, self.density, other)
+        if o.computed is None:
+            return []
+        c = o.computed
+        return [((("other_geometry", {"source": other}, f"of the {other} geometry"),),
+                 c.mass, c.center_of_mass, c.inertia)]
 
 
 def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | None,
@@ -260,31 +405,37 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         try:
             part = integrate_geometry(g, meshes)
         except MassPropsError as exc:
-            return skipped(f"{g.uri or g.kind} (line {g.node.line}): {error_message(exc)}", True)
+            hint = ""
+            if isinstance(exc, MeshTopologyError) and link.source == "collision":
+                hint = "; or --from visual to compute the link from its visual geometry"
+            return skipped(f"{g.uri or g.kind} (line {g.node.line}): {error_message(exc)}{hint}",
+                           True)
         warnings.extend(f"{g.uri}: {w}" for w in part.warnings)
         if part.repairs:
             repaired[g.uri or g.kind] = part.repairs
         parts.append(part)
     stated = link.stated
-    total = None
-    if density is not None:
-        masses = [density * p.volume for p in parts]
-    else:
+
+    def split(parts) -> tuple[list[float], float | None] | None:
+        """(each part's mass, the link's total to report) by the link's mass rule."""
+        if density is not None:
+            return [density * p.volume for p in parts], None
         weights = [g.mass if g.mass is not None else (g.density or 1.0) * p.volume
                    for g, p in zip(link.geometries, parts)]
         if stated is not None and stated.mass > 0:
-            masses = [stated.mass * w / sum(weights) for w in weights]
-            total = stated.mass
-        elif link.auto_mass is not None:  # SDF auto: the densities' shares of the given mass
-            masses = [link.auto_mass * w / sum(weights) for w in weights]
-            total = link.auto_mass
-        elif model.format == "mjcf" or all(g.density is not None for g in link.geometries):
-            masses = weights
-        else:
-            return skipped(f"no stated mass to keep and no {setting_ref('density')}: give "
-                           f"{setting_ref('density')} RHO "
-                           "(kg/m³)", False)
-    computed = combine(parts, masses, total)
+            return [stated.mass * w / sum(weights) for w in weights], stated.mass
+        if link.auto_mass is not None:  # SDF auto: the densities' shares of the given mass
+            return [link.auto_mass * w / sum(weights) for w in weights], link.auto_mass
+        if model.format == "mjcf" or all(g.density is not None for g in link.geometries):
+            return weights, None
+        return None
+
+    shares = split(parts)
+    if shares is None:
+        return skipped(f"no stated mass to keep and no {setting_ref('density')}: give "
+                       f"{setting_ref('density')} RHO "
+                       "(kg/m³)", False)
+    computed = combine(parts, *shares)
     if stated is None:
         if model.format != "mjcf" and link.inertial_node is None:  # MJCF, SDF auto: the sum
             warnings.append("no stated inertial: nothing to compare")
@@ -294,4 +445,5 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
     if not np.isfinite(computed.inertia).all():
         return skipped("the computed inertia is not finite", True)
     return LinkReport(link, "computed", None, False, computed, comparison, tuple(warnings),
-                      repaired or None)
+                      repaired or None,
+                      shapes=lambda: shape_bases(link.geometries, parts, meshes, split))

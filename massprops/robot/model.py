@@ -47,9 +47,12 @@ class Geometry:
         None. A link with a problem is skipped and counted as an input error.
     vertices, faces : an inline mesh (MJCF ``<mesh vertex= face=>``), else None.
     warning : a remark about how a simulator treats it (not an error), or None.
-    hull : the simulator integrates this mesh's convex hull (MJCF mesh inertia "convex", and
-        "legacy" for a convex mesh): a mesh that is not a closed solid is then taken as its hull,
-        with a warning, instead of being refused.
+    rule : how the simulator integrates this mesh (MJCF ``<mesh inertia>``): "exact" (the
+        default elsewhere), "convex" (its hull: a mesh that is not a closed solid is then taken
+        as its hull, with a warning, instead of being refused), "legacy" (MuJoCo's default: a
+        mesh that is not closed is integrated by `combine.legacy_mesh_inertia`, what MuJoCo
+        simulates, with a warning) or "shell" (the surface carries the mass: ``density`` is
+        then per m², integrated by `massprops.repair.shell` in the thin-wall limit).
     node : the element it came from (line numbers).
     """
 
@@ -67,7 +70,7 @@ class Geometry:
     vertices: np.ndarray | None = None
     faces: np.ndarray | None = None
     warning: str | None = None
-    hull: bool = False
+    rule: str = "exact"
 
 
 @dataclass(frozen=True, eq=False)

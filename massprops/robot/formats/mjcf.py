@@ -295,7 +295,8 @@ class _Walker:
                 return None
         elif not lo <= group <= hi:
             return None
-        kind = a.get("type", "sphere")
+        # MuJoCo: a geom that names a mesh and no type is a mesh geom (else the type is sphere)
+        kind = a.get("type", "mesh" if "mesh" in a else "sphere")
         density = float(a.get("density", _DEFAULT_DENSITY))
         mass = float(a["mass"]) if "mass" in a else None
         if (mass if mass is not None else density) == 0:
@@ -334,20 +335,23 @@ class _Walker:
                 raise v.error(node, f"mesh={name!r}: no <mesh> asset of that name")
             mesh = self.ctx.meshes[name]
             warning = None
-            if mesh["inertia"] == "shell":
-                mesh["problem"] = (f"<mesh name={name!r} inertia=\"shell\">: a hollow shell is "
-                                   "not supported; massprops integrates solids")
-            elif mesh["inertia"] != "exact" and mesh["faces"] is None and \
-                    mesh["vertices"] is not None:
+            rule = mesh["inertia"]
+            if rule in ("exact", "shell") or (mesh["faces"] is None
+                                               and mesh["vertices"] is not None):
                 pass  # points only: the mesh is their hull, for MuJoCo and massprops alike
-            elif mesh["inertia"] != "exact":
-                warning = (f"mesh {name!r}: MuJoCo's mesh inertia {mesh['inertia']!r} integrates "
-                           "the convex hull; massprops the mesh itself (add inertia=\"exact\" "
-                           "to the <mesh> to make MuJoCo agree on a non-convex mesh)")
+            elif rule == "convex":
+                warning = (f"mesh {name!r}: MuJoCo's mesh inertia 'convex' integrates the "
+                           "convex hull; massprops the mesh itself (add inertia=\"exact\" to "
+                           "the <mesh> to make MuJoCo agree on a non-convex mesh)")
+            else:
+                warning = (f"mesh {name!r}: MuJoCo's mesh inertia {rule!r} (its default) "
+                           "integrates the mesh's own faces, each face's pyramid volume taken "
+                           "positive, which overcounts a non-convex mesh; massprops integrates "
+                           "the exact volume (add inertia=\"exact\" to the <mesh> to make "
+                           "MuJoCo agree)")
             return Geometry("mesh", path=mesh["path"], uri=mesh["uri"], scale=mesh["scale"],
                             problem=mesh["problem"], vertices=mesh["vertices"],
-                            faces=mesh["faces"], warning=warning,
-                            hull=mesh["inertia"] in ("convex", "legacy"), **common)
+                            faces=mesh["faces"], warning=warning, rule=rule, **common)
         return Geometry(kind, problem=f"geom type {kind!r} (line {node.line}) has no volume "
                                       "massprops can integrate", **common)
 

@@ -9,8 +9,10 @@ What "differs by more than RTOL" means (``Comparison.worst``, what ``model --che
   of the moment about any axis, relative to the largest principal moment): it sees wrong moments
   and wrongly turned axes alike, and stays defined where principal axes are not (a cylinder).
 The angle between the principal frames is reported but not tested: it is meaningless where
-moments (nearly) coincide. A stated tensor that is not physically valid (not positive
-definite, or a moment larger than the sum of the other two) fails the check whatever RTOL.
+moments (nearly) coincide. A stated inertial that is not physically valid (`doctor.validity`:
+not positive definite, a moment larger than the sum of the other two, its COM outside the
+geometry's hull, or no non-negative density inside the geometry can have it) fails the check
+whatever RTOL.
 """
 
 from __future__ import annotations
@@ -21,11 +23,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.inertia import principal_axes
+from massprops.robot.doctor.validity import Validity, judge
 from massprops.robot.inertials.combine import LinkMass
 from massprops.robot.model import StatedInertial
-from massprops.tolerances import DEGENERATE_MOMENT_RTOL, INERTIA_VALIDITY_RTOL
+from massprops.tolerances import DEGENERATE_MOMENT_RTOL
 
-__all__ = ["Comparison", "compare", "validity_problems"]
+__all__ = ["Comparison", "compare", "relative_difference", "validity_problems"]
 
 
 @dataclass(frozen=True)
@@ -33,7 +36,8 @@ class Comparison:
     """mass_rel, com_offset (m), com_rel (of size), inertia_rel: as the module says.
     axes_angle : rad, the largest angle between matching principal axes whose computed moment
     stands apart from the others, or None when all three coincide (a sphere, a cube).
-    problems : why the stated tensor is not physically valid ([] if it is)."""
+    problems : why the stated inertial is not physically valid ([] if it is).
+    valid : the stated inertial's `doctor.validity` tests against the link's geometry."""
 
     mass_rel: float
     com_offset: float
@@ -41,6 +45,7 @@ class Comparison:
     inertia_rel: float
     axes_angle: float | None
     problems: tuple[str, ...]
+    valid: Validity | None = None
 
     @property
     def worst(self) -> float:
@@ -57,29 +62,24 @@ class Comparison:
 
 
 def validity_problems(mass: float, inertia: np.ndarray) -> tuple[str, ...]:
-    """Why (mass, inertia about the COM) cannot belong to a body; () when it can."""
-    out = []
-    if not (math.isfinite(mass) and mass > 0):
-        out.append(f"mass {mass!r} is not positive")
-    j = np.asarray(inertia, dtype=np.float64)
-    if not np.isfinite(j).all():
-        return (*out, "inertia has non-finite entries")
-    scale = float(np.max(np.abs(j))) or 1.0
-    if np.max(np.abs(j - j.T)) > INERTIA_VALIDITY_RTOL * scale:
-        out.append("inertia is not symmetric")
-    moments = np.linalg.eigvalsh(0.5 * (j + j.T))
-    tol = INERTIA_VALIDITY_RTOL * max(float(np.max(np.abs(moments))), 0.0)
-    if moments[0] <= tol:
-        out.append(f"inertia is not positive definite (smallest principal moment "
-                   f"{moments[0]:.6g} kg·m²)")
-    elif moments[2] > moments[0] + moments[1] + tol:
-        out.append(f"principal moments {moments[0]:.6g}, {moments[1]:.6g}, {moments[2]:.6g} "
-                   "break the triangle inequality (the largest exceeds the sum of the others)")
-    return tuple(out)
+    """Why (mass, inertia about the COM) cannot belong to any body; () when it can (the tensor
+    tests of `doctor.validity.judge`, without geometry)."""
+    return judge(mass, np.zeros(3), inertia, None).problems
+
+
+def relative_difference(mass_a: float, com_a: np.ndarray, inertia_a: np.ndarray, mass_b: float,
+                        com_b: np.ndarray, inertia_b: np.ndarray, size: float) -> float:
+    """max(mass, COM / size, inertia) relative difference of inertial a from inertial b (kg, m,
+    kg·m² about each COM, one frame), as the module measures them: ``Comparison.worst``."""
+    return max(abs(mass_a - mass_b) / abs(mass_b),
+               float(np.linalg.norm(np.asarray(com_a) - com_b)) / size,
+               float(np.linalg.norm(inertia_a - inertia_b, 2))
+               / float(np.linalg.norm(inertia_b, 2)))
 
 
 def compare(stated: StatedInertial, computed: LinkMass) -> Comparison:
     """Stated against computed, both about their own centres of mass in the link's axes."""
+    valid = judge(stated.mass, stated.center_of_mass, stated.inertia, computed.bounds)
     offset = float(np.linalg.norm(stated.center_of_mass - computed.center_of_mass))
     norm = float(np.linalg.norm(computed.inertia, 2))
     return Comparison(
@@ -88,7 +88,8 @@ def compare(stated: StatedInertial, computed: LinkMass) -> Comparison:
         com_rel=offset / computed.size,
         inertia_rel=float(np.linalg.norm(stated.inertia - computed.inertia, 2)) / norm,
         axes_angle=_axes_angle(stated.inertia, computed),
-        problems=validity_problems(stated.mass, stated.inertia),
+        problems=valid.problems,
+        valid=valid,
     )
 
 

@@ -107,3 +107,4 @@ def _scaled(c: LinkMass, factor: float) -> LinkMass:
     inertia = c.inertia * factor
     return replace(c, mass=c.mass * factor, inertia=inertia,
                    principal_moments=c.principal_moments * factor)
+

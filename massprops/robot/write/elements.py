@@ -1,4 +1,6 @@
-"""The ``<inertial>`` element of each format, as text to paste or to write back.
+"""The ``<inertial>`` element of each format, as text to paste or to write back, and the mass
+properties of the engines' formats (glTF's ``KHR_physics_rigid_bodies``, USD's
+``PhysicsMassAPI``), which state them in the principal frame.
 
 Every writer takes (mass kg, center_of_mass (3,) m, inertia (3, 3) kg·m² about the COM in the
 link/mesh axes) and returns the element; the inertial frame is the link frame moved to the COM
@@ -16,7 +18,7 @@ import numpy as np
 
 from massprops.errors import setting_ref
 
-__all__ = ["WRITERS", "mjcf_inertial", "sdf_inertial", "urdf_inertial"]
+__all__ = ["WRITERS", "gltf_motion", "mjcf_inertial", "sdf_inertial", "urdf_inertial", "usd_mass"]
 
 Writer = Callable[..., str]
 
@@ -89,5 +91,58 @@ def _no_principal(principal: bool, name: str) -> None:
                          f"diaginertia); {name} gets the tensor in the link axes")
 
 
-WRITERS: dict[str, Writer] = {"urdf": urdf_inertial, "sdf": sdf_inertial, "mjcf": mjcf_inertial}
-"""format name -> writer of its ``<inertial>`` element."""
+def _principal(inertia) -> tuple[np.ndarray, np.ndarray]:
+    """(ascending moments, the principal frame's quaternion [w, x, y, z], w >= 0): the
+    rotation taking principal-frame coordinates into the mesh/link frame."""
+    # deferred: only the engines' formats (and mjcf --principal) need the eigen-solver
+    from massprops.inertia import principal_axes
+    from massprops.rotation import matrix_to_quat
+
+    moments, axes = principal_axes(np.asarray(inertia, dtype=np.float64))
+    return moments, matrix_to_quat(axes)
+
+
+def gltf_motion(mass: float, center_of_mass, inertia, *, indent: str = "  ",
+                newline: str = "\n", principal: bool = False) -> str:
+    """glTF ``KHR_physics_rigid_bodies`` motion, one JSON object on one line:
+    ``{"mass", "centerOfMass", "inertiaDiagonal", "inertiaOrientation"}``; kg, m, kg·m² in the
+    node's (mesh's) frame; the diagonal is the principal moments (ascending) in the frame the
+    orientation gives, a unit quaternion in glTF's order [x, y, z, w] taking that frame into
+    the node's (w >= 0). Always principal: ``principal`` is accepted and changes nothing."""
+    moments, q = _principal(inertia)
+    # deferred: json only for this format
+    import json
+
+    return json.dumps({"mass": float(mass) + 0.0,
+                       "centerOfMass": [float(x) + 0.0 for x in center_of_mass],
+                       "inertiaDiagonal": [float(x) + 0.0 for x in moments],
+                       "inertiaOrientation": [float(x) + 0.0 for x in (*q[1:], q[0])]})
+
+
+def usd_mass(mass: float, center_of_mass, inertia, *, indent: str = "    ",
+             newline: str = "\n", principal: bool = False, name: str = "Body") -> str:
+    """A usda prim with ``PhysicsMassAPI`` applied: ``physics:mass`` (kg),
+    ``physics:centerOfMass`` (m, the prim's frame), ``physics:diagonalInertia`` (kg·m², the
+    principal moments ascending) and ``physics:principalAxes`` (the quaternion taking the
+    principal frame into the prim's, USD's order: real first). ``name``: the prim's name (made
+    a valid identifier). Always principal, as USD states it."""
+    moments, q = _principal(inertia)
+    ident = "".join(c if c.isalnum() or c == "_" else "_" for c in name) or "Body"
+    if ident[0].isdigit():
+        ident = "_" + ident
+    return newline.join([
+        f'def Xform "{ident}" (',
+        f'{indent}prepend apiSchemas = ["PhysicsMassAPI"]',
+        ")",
+        "{",
+        f"{indent}float physics:mass = {_num(mass)}",
+        f"{indent}point3f physics:centerOfMass = ({', '.join(_num(x) for x in center_of_mass)})",
+        f"{indent}float3 physics:diagonalInertia = ({', '.join(_num(x) for x in moments)})",
+        f"{indent}quatf physics:principalAxes = ({', '.join(_num(x) for x in q)})",
+        "}"])
+
+
+WRITERS: dict[str, Writer] = {"urdf": urdf_inertial, "sdf": sdf_inertial, "mjcf": mjcf_inertial,
+                              "gltf": gltf_motion, "usd": usd_mass}
+"""format name -> writer of its element: the robot formats' ``<inertial>``, glTF's
+``KHR_physics_rigid_bodies`` motion, USD's ``PhysicsMassAPI`` prim."""
