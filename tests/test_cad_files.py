@@ -50,7 +50,8 @@ def test_assembly_in_millimetres_per_solid_and_total(assembly):
     truths = [_truth("box", 10.0, (0, 0, 0)), _truth("cylinder", 2.0, (100, 0, 0)),
               _truth("sphere", 4.0, (FAR, 0, 0))]
     densities = [2700.0, 7800.0, 1.0]   # the map's first match; far_ball takes the default
-    for r, (volume, com, diag), rho in zip(result.solids, truths, densities):
+    offsets_mm = [0.0, 100.0, FAR]  # where write_assembly placed each part, along x
+    for r, (volume, com, diag), rho, x in zip(result.solids, truths, densities, offsets_mm):
         p = r.properties
         assert p.density == rho
         assert p.volume == pytest.approx(volume, rel=1e-13, abs=0)
@@ -58,7 +59,9 @@ def test_assembly_in_millimetres_per_solid_and_total(assembly):
                            + np.spacing(np.abs(com)).max())
         assert np.allclose(np.diag(p.inertia), rho * diag, rtol=1e-13, atol=0)
         assert r.integration is None and r.input is not None
-        assert r.placement[0, 3] == pytest.approx(com[0] - (com[0] - r.placement[0, 3]))
+        # the part's placement in the assembly, translation in metres
+        assert r.placement[:3, 3] == pytest.approx([x * 0.001, 0.0, 0.0], rel=1e-15, abs=0)
+        assert np.array_equal(r.placement[:3, :3], np.eye(3))
     # the total by hand: masses, COM and parallel axes from the closed forms
     masses = np.array([rho * t[0] for rho, t in zip(densities, truths)])
     coms = np.array([t[1] for t in truths])
