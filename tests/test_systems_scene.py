@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from massprops.dynamics.systems.run import prepare
@@ -114,3 +115,52 @@ def test_cli_json_contract(tmp_path):
     header = out.read_text().splitlines()[0].split(",")
     assert header[:4] == ["t", "upper.x", "upper.y", "upper.z"]
     assert "elbow.q" in header and "elbow.u" in header and "elbow.tz" in header
+
+
+# --- issue 30 -------------------------------------------------------------------------------
+PENDULUM = f"""bodies:
+  rod: {ROD}position: [0, 0, -0.5]}}
+joints:
+  - {{name: u, type: universal, bodies: [world, rod], point: [0, 0, 0], axes: AXES}}
+forces: [{{type: gravity, g: [0, 0, -9.81]}}]
+time: {{duration: 0.5}}
+"""
+
+
+@pytest.mark.parametrize("axes", ["[[1, 0, 0], [1, 0, 0]]", "[[1, 0, 0], [-2, 0, 0]]",
+                                  "[[1, 0, 0], [1, 1.0e-7, 0]]"],
+                         ids=["parallel", "anti-parallel", "1e-7-rad-apart"])
+def test_a_universal_joint_with_parallel_axes_is_refused_at_its_key(tmp_path, axes):
+    """Parallel axes make its two turns one: the joint's motion subspace loses a rank for good
+    and its mass matrix is singular (the run ended in 'LinAlgError: Matrix is not positive
+    definite', exit 3, no file named). Lines closer than 2e-6 rad (tan of half the angle
+    within NEAR_SINGULAR_MARGIN) are refused as parallel."""
+    message = _refused(PENDULUM.replace("AXES", axes), tmp_path)
+    assert message.startswith("s.yaml:4: joints[0].axes:") and "parallel" in message
+
+
+@pytest.mark.parametrize("axes", ["[[1, 0, 0], [1, 1.0e-5, 0]]", "[[1, 0, 0], [0, 1, 0]]",
+                                  "[[1.0e300, 0, 0], [0, 0, 1.0e-200]]"],
+                         ids=["1e-5-rad-apart", "perpendicular", "huge-and-tiny-lengths"])
+def test_a_universal_joint_with_distinct_axes_reads(tmp_path, axes):
+    scene = parse_system(PENDULUM.replace("AXES", axes), source="s.yaml", base_dir=tmp_path)
+    a = scene.joints[0].axes
+    assert np.linalg.norm(a, axis=1) == pytest.approx([1.0, 1.0], abs=1e-15)
+    prepare(scene)
+
+
+@pytest.mark.parametrize("axes, words", [("[[0, 0, 0], [0, 1, 0]]", "zero-length axis"),
+                                         ("[[1, 0, 0]]", "two axes")])
+def test_a_universal_joint_axis_of_no_direction_is_refused(tmp_path, axes, words):
+    message = _refused(PENDULUM.replace("AXES", axes), tmp_path)
+    assert message.startswith("s.yaml:4: joints[0].axes") and words in message
+
+
+@pytest.mark.parametrize("command", ["simulate", "precision"])
+def test_cli_parallel_universal_axes_exit_1_naming_the_file(tmp_path, run, command):
+    path = tmp_path / "u.yaml"
+    path.write_text(PENDULUM.replace("AXES", "[[1, 0, 0], [1, 0, 0]]"))
+    res = run(command, str(path))
+    assert res.exit_code == 1, res.stderr
+    (line,) = res.stderr.strip().splitlines()
+    assert "u.yaml:4: joints[0].axes" in line and "internal error" not in line

@@ -27,6 +27,7 @@ __all__ = [
     "one_line",
     "read_boolean",
     "read_choice",
+    "read_direction",
     "read_mapping",
     "read_matrix3",
     "read_non_negative",
@@ -268,6 +269,19 @@ def read_vector(field: Field, length: int = 3) -> np.ndarray:
     """(length,) float64, read-only."""
     return readonly_array([read_number(f)
                            for f in _items(field, length, f"a list of {length} numbers")])
+
+
+def read_direction(field: Field) -> np.ndarray:
+    """(3,) a unit vector along a list of 3 numbers that is not zero, read-only. Scaled by its
+    largest component before its length is taken, so that no length overflows or underflows
+    (|[1e300, 0, 0]|² is beyond float64, |[1e-170, 0, 0]|² below it): any finite non-zero
+    vector has a direction."""
+    v = np.array(read_vector(field))
+    largest = float(np.abs(v).max())
+    if largest == 0.0:
+        raise field.error("expected a non-zero direction, got a zero-length axis")
+    v = v / largest
+    return readonly_array((v / float(np.linalg.norm(v))).tolist())
 
 
 def read_matrix3(field: Field) -> np.ndarray:

@@ -10,12 +10,14 @@ here in ``SystemScene.places``.
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from pathlib import Path
 
 import numpy as np
 import yaml
 
+from massprops import tolerances
 from massprops.dynamics.model import RigidBody, TimeSettings
 from massprops.dynamics.scene import (
     TIME_KEYS,
@@ -46,6 +48,7 @@ from massprops.dynamics.yamlnodes import (
     is_str,
     read_boolean,
     read_choice,
+    read_direction,
     read_mapping,
     read_non_negative,
     read_number,
@@ -212,12 +215,27 @@ def _pair(field: Field, index: dict) -> tuple[int, int]:
     return a, b
 
 
-def _unit(field: Field) -> np.ndarray:
-    v = np.array(read_vector(field))
-    norm = float(np.linalg.norm(v))
-    if norm == 0.0:
-        raise field.error("expected a non-zero direction, got a zero-length axis")
-    return v / norm
+def _two_axes(field: Field) -> np.ndarray:
+    """(2, 3) a universal joint's two unit axes, which must not be parallel: its two turns
+    would then be one, and its motion subspace [a0, a1] (the columns of S, whose singular values
+    are √(1 ± cos α), α the angle between the axes) would lose a rank for good (turning about
+    a0 keeps a1's angle to it). Refused like a singular pose: where σ_min / σ_max = tan(α' / 2),
+    α' the acute angle between the axis lines, is within NEAR_SINGULAR_MARGIN (α' ≤ 2e-6 rad),
+    the run's own test of a mechanism at rank loss; nearer than that the joint's mass matrix
+    (condition ~1 / tan²) is not positive definite in float64."""
+    if not (isinstance(field.node, yaml.SequenceNode) and len(field.node.value) == 2):
+        raise field.error("expected two axes [[...], [...]]")
+    axes = np.array([np.array(read_direction(field.child(n, k)))
+                     for k, n in enumerate(field.node.value)])
+    cos = min(abs(float(axes[0] @ axes[1])), 1.0)
+    half_turn = float(np.linalg.norm(np.cross(axes[0], axes[1]))) / (1.0 + cos)  # tan(α'/2)
+    if not half_turn > tolerances.NEAR_SINGULAR_MARGIN:
+        angle = 2.0 * math.atan(half_turn)
+        raise field.error(f"the two axes are parallel ({angle:.3g} rad apart as lines): a "
+                          "universal joint turns about two different directions, at least "
+                          f"{2.0 * math.atan(tolerances.NEAR_SINGULAR_MARGIN):.1g} rad apart "
+                          "(typically perpendicular); for one axis use a revolute joint")
+    return axes
 
 
 def _joints(field: Field | None, index: dict, places: dict) -> tuple[SystemJoint, ...]:
@@ -244,13 +262,9 @@ def _joints(field: Field | None, index: dict, places: dict) -> tuple[SystemJoint
         values: dict = {"point": read_vector(fields["point"]) if "point" in fields else None,
                         "axes": np.zeros((0, 3))}
         if "axis" in fields:
-            values["axes"] = _unit(fields["axis"])[None, :]
+            values["axes"] = np.array(read_direction(fields["axis"]))[None, :]
         if "axes" in fields:
-            axes = fields["axes"]
-            if not (isinstance(axes.node, yaml.SequenceNode) and len(axes.node.value) == 2):
-                raise axes.error("expected two axes [[...], [...]]")
-            values["axes"] = np.array([_unit(axes.child(n, k))
-                                       for k, n in enumerate(axes.node.value)])
+            values["axes"] = _two_axes(fields["axes"])
         if "points" in fields:
             pts = fields["points"]
             if not (isinstance(pts.node, yaml.SequenceNode) and len(pts.node.value) == 2):
