@@ -44,6 +44,10 @@ class IntegratorSpec:
     stiff : stable far beyond the explicit step limit (~2.8 / ForceProgram.stiffest_rate).
     estimate_order : the highest order the error estimate's Richardson rule may assume (None:
         ``order``); lower where the order can fall on stiff problems (order reduction).
+    tableau : (A, b), the Butcher tableau of one step as nested tuples (A (s, s), b (s,)), whose
+        stability function R(z) = 1 + z bᵀ (I − z A)⁻¹ 1 tells what a step does to a rotation
+        (`accuracy.rotation_floor`); None for a method that is no single Runge-Kutta step (the
+        splitting methods turn exactly; the closed form takes no step).
     """
 
     name: str
@@ -53,6 +57,7 @@ class IntegratorSpec:
     run_segment: RunSegment
     stiff: bool = False
     estimate_order: int | None = None
+    tableau: tuple | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
