@@ -532,3 +532,13 @@ def test_mesh_body_from_a_vtx_fac_pair_reads_and_protects_both_files(tmp_path):
     assert scene.input_files == (tmp_path / "box.fac", tmp_path / "box.vtx")
     np.testing.assert_allclose(scene.body.center_of_mass, cuboid_truth(SIDES, OFFSET, 6)[0],
                                rtol=1e-12)
+
+
+# --- issue 30: values a run cannot use, said before it starts --------------------------------
+
+
+@pytest.mark.parametrize("rtol", ["1.0e-30", "1.0e-16"])
+def test_an_rtol_below_what_float64_gives_is_refused_saying_the_smallest(rtol):
+    message = assert_refused(BODY + f"time: {{duration: 1, rtol: {rtol}}}  # <-\n", "time.rtol")
+    assert "smallest rtol accepted is 1e-15" in message
+    assert parse(BODY + "time: {duration: 1, rtol: 1.0e-15}\n").time.rtol == 1e-15

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -316,3 +317,61 @@ def test_cache_folders_unused_for_a_month_are_pruned(tmp_path):
     dyn._prune_unused(tmp_path, keep=tmp_path / "numba-current")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["numba-current", "numba-recent",
                                                           "unrelated"]
+
+
+# --- issue 30: absurd settings get the right advice; what a run ignores is said ----------------
+SAMPLE_SCENES = Path(__file__).resolve().parent.parent / "sample_scenes"
+
+
+def test_one_run_bound_for_one_body_and_systems():
+    """budget.MAX_STEPS (2e7, what --max-steps says) is the bound of every run: systems kept a
+    bound of their own (2e6), which stopped a one-body rk4 run at a tenth of it."""
+    import inspect
+
+    from massprops.dynamics import budget, precision
+    from massprops.dynamics.systems import integrate
+
+    assert budget.MAX_STEPS == 20_000_000
+    assert inspect.signature(integrate.integrate).parameters["max_steps"].default \
+        == budget.MAX_STEPS
+    for module in (integrate, precision):
+        assert getattr(module, "MAX_STEPS", budget.MAX_STEPS) is budget.MAX_STEPS
+
+
+def test_a_fixed_step_system_run_beyond_the_bound_is_refused_up_front(run):
+    """2.5e7 steps of rk4: refused before it runs, saying the bound and the step that fits
+    (a system's run went on until its own bound of 2e6 steps, then stopped)."""
+    res = run("simulate", SAMPLE_SCENES / "double_pendulum.yaml", "--integrator", "rk4",
+              "--step", "4e-7")
+    assert res.exit_code == 3, res.stderr
+    (line,) = res.stderr.strip().splitlines()
+    assert "2.5e+07 steps" in line and "2e+07" in line and "at least 5e-07 s" in line
+
+
+@pytest.mark.parametrize("duration", ["1e8", "1e12"])
+def test_a_duration_beyond_what_float64_resolves_is_said_not_called_stiff(run, duration):
+    """The double pendulum (fastest rate ~6/s) over 1e8 s and 1e12 s: dop853's step fell below
+    1e-14 of the run at t = 0, which said 'too stiff ... run the implicit method' (and the
+    implicit method then failed too): the system is not stiff; the duration is the problem."""
+    res = run("simulate", SAMPLE_SCENES / "double_pendulum.yaml", "--duration", duration)
+    assert res.exit_code == 3, res.stderr
+    (line,) = res.stderr.strip().splitlines()
+    assert "not stiff" in line and "--duration" in line and "t·eps" in line
+    assert "implicit" not in line and "too stiff" not in line
+
+
+def test_an_implicit_run_whose_resolving_step_cannot_fit_says_so(run):
+    res = run("simulate", SAMPLE_SCENES / "double_pendulum.yaml", "--duration", "1e8",
+              "--integrator", "implicit")
+    assert res.exit_code == 3, res.stderr
+    (line,) = res.stderr.strip().splitlines()
+    assert "Newton" in line and "--duration" in line and "2e+07 steps" in line
+
+
+@pytest.mark.parametrize("scene_file", ["double_pendulum.yaml", "dzhanibekov.yaml"])
+def test_cli_an_rtol_below_what_float64_gives_is_a_usage_error(run, scene_file):
+    res = run("simulate", SAMPLE_SCENES / scene_file, "--rtol", "1e-30",
+              "--integrator", "dop853")
+    assert res.exit_code == 2, res.stderr
+    (line,) = res.stderr.strip().splitlines()
+    assert "--rtol 1e-30" in line and "smallest accepted is 1e-15" in line

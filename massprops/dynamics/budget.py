@@ -29,11 +29,13 @@ import numpy as np
 from massprops.errors import RunBudgetError, setting_ref
 
 MAX_STEPS = 20_000_000
-"""Steps one run may take unless the caller says otherwise (``simulate(max_steps=)``, the CLI's
---max-steps). Measured cost per step (warm, one shared core, a body on a damped spring): rk4
-~1 µs, midpoint ~2.5 µs, dop853 ~5 µs, implicit ~5 µs, splitting ~8 µs, splitting6 ~50 µs (nine
-drifts per step), so a run reaches the bound after ~20 s (rk4) to ~2 min (dop853, implicit), 15
-min at most (splitting6), and a fixed-step run that needs more is refused in the first place."""
+"""Steps one run may take unless the caller says otherwise (``simulate(max_steps=)``,
+``simulate_system(max_steps=)``, the CLI's --max-steps), one body and systems alike (the one
+bound: systems once had their own, 2e6, which stopped a one-body rk4 run there). Measured cost
+per step (warm, one shared core, a body on a damped spring, the one-body kernels): rk4 ~1 µs,
+midpoint ~2.5 µs, dop853 ~5 µs, implicit ~5 µs, splitting ~8 µs, splitting6 ~50 µs (nine drifts
+per step), so a run reaches the bound after ~20 s (rk4) to ~2 min (dop853, implicit), 15 min at
+most (splitting6), and a fixed-step run that needs more is refused in the first place."""
 
 PROJECT_AFTER = 1_000_000
 """Steps an adaptive run takes before its pace is used to project the whole run (a start whose

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from massprops import tolerances
 from massprops.dynamics.joints.scene import bind_scene, parse_joints, read_project
 from massprops.dynamics.model import (
     INF,
@@ -314,6 +315,11 @@ def _time(field: Field, known_integrators: Sequence[str]) -> TimeSettings:
         rtol = read_number(fields["rtol"])
         if not 0 < rtol < 1:
             raise fields["rtol"].error(f"expected a number in (0, 1) such as 1.0e-9, got {rtol!r}")
+        if rtol < tolerances.RTOL_FLOOR:
+            raise fields["rtol"].error(
+                f"{rtol!r} asks for more digits than float64 has (a step is rounded to "
+                f"{tolerances.EPS / 2:.2g} relative); the smallest rtol accepted is "
+                f"{tolerances.RTOL_FLOOR:g}")
         values["rtol"] = rtol
     if "step" in fields:
         values["step"] = read_positive(fields["step"])

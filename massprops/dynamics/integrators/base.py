@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.errors import UsageError, setting_ref
+from massprops.tolerances import EPS, RTOL_FLOOR
 
 # --- stats : (5,) int64, accumulated (+=) by every kernel -----------------------------------------
 STEPS, NFEV, REJECTED, NJEV, STATUS = range(5)
@@ -86,9 +87,8 @@ def segment_runner(name: str, kind: str, kernel, *, scaled: bool = False) -> Run
         if not (math.isfinite(setting) and setting > 0):
             raise UsageError(f"integrator {name}: expected a {what} > 0, got {setting!r}; "
                              f"set {fix} to a positive number")
-        if kind == "adaptive" and setting < 1e-15:
-            raise UsageError(f"integrator {name}: rtol {setting!r} is below round-off "
-                             f"(2.2e-16); set {fix} to at least 1e-15")
+        if kind == "adaptive":
+            check_rtol(setting, f"integrator {name}")
         check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats)
         active, codes, params, mass, inertia = program_arrays[:5]
         if not scaled:
@@ -103,6 +103,16 @@ def segment_runner(name: str, kind: str, kernel, *, scaled: bool = False) -> Run
     run_segment.__doc__ = (f"Advance y in place from t0 to t1 with {name} ({kind}; setting = "
                            f"{what}); see massprops.dynamics.integrators for the contract.")
     return run_segment
+
+
+def check_rtol(rtol: float, who: str) -> None:
+    """UsageError (said as ``who: ...``) for an ``rtol`` below `tolerances.RTOL_FLOOR`, the
+    smallest relative tolerance float64 can deliver (one scene's key is refused the same way,
+    at its line: `dynamics.scene`)."""
+    if rtol < RTOL_FLOOR:
+        raise UsageError(f"{who}: {setting_ref('rtol')} {rtol!r} asks for more digits than "
+                         f"float64 has (a step is rounded to {EPS / 2:.2g} relative); the "
+                         f"smallest accepted is {RTOL_FLOOR:g}")
 
 
 def check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats) -> None:

@@ -20,6 +20,7 @@ from massprops.dynamics.accuracy import (
     rotation_floor,
 )
 from massprops.dynamics.budget import STEP_BUDGET
+from massprops.dynamics.integrators.base import check_rtol
 from massprops.dynamics.systems.integrate import integrate
 from massprops.dynamics.systems.model import WORLD
 from massprops.dynamics.systems.outputs import Samples, distance, evaluate_states
@@ -61,8 +62,9 @@ def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
                                             f"~{explicit:.2g} explicit steps "
                                             f"(> {STEP_BUDGET:.0e})")
     if name == "dop853":
-        return name, float(rtol if rtol is not None else scene.time.rtol), \
-            reason or REASONS[name]
+        value = float(rtol if rtol is not None else scene.time.rtol)
+        check_rtol(value, scene.source)  # a scene's own is refused at its line already
+        return name, value, reason or REASONS[name]
     h = step if step is not None else scene.time.step
     if h is None:
         h = default_step(system, y0, scene.time.duration, stiff=is_stiff(name))

@@ -14,12 +14,17 @@ import numpy as np
 
 from massprops import tolerances
 from massprops.dynamics.accuracy import estimate_note
-from massprops.dynamics.budget import ENERGY_BLOWUP, sample_times
+from massprops.dynamics.budget import (
+    ENERGY_BLOWUP,
+    MAX_STEPS,
+    check_fixed_steps,
+    sample_times,
+)
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
 from massprops.dynamics.systems.falling import falling_frame
-from massprops.dynamics.systems.integrate import MAX_STEPS, integrate
+from massprops.dynamics.systems.integrate import integrate
 from massprops.dynamics.systems.methods import (
     REASONS,
     SYSTEM_INTEGRATORS,
@@ -161,7 +166,8 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     """Run ``scene`` with ``integrator`` (SYSTEM_INTEGRATORS; default the scene's) at ``rtol``
     (dop853) or ``step`` (s, the fixed-step ones; default the scene's, else `default_step`);
     ComputationError (exit 3) at a singular pose or a failed step,
-    RunBudgetError once a run takes ``max_steps`` steps (default: integrate.MAX_STEPS).
+    RunBudgetError once a run takes ``max_steps`` steps (default: budget.MAX_STEPS), or up
+    front for a fixed step that would take more.
     ``notice(text)``: told once if the step loop's kernel has to be compiled (see
     `compiled.compiling.prepare`). ``progress(fraction)`` is called between the run's compiled
     calls. Ctrl-C there propagates, or with ``interruptible`` returns the samples computed so
@@ -179,11 +185,13 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     # evaluates the compiled right-hand side)
     prepare_kernels([SYSTEMS], notice)
     name, setting, reason = choose(system, y0, name, rtol, step)
+    limit = max_steps or MAX_STEPS
+    if kind_of(name) == "fixed":  # the run bound, before the run: its step count is known
+        check_fixed_steps(name, duration, setting, len(_windows(scene)), scene.source, limit)
     t_out = sample_times(duration, every if every is not None else scene.output.every,
                          scene.source)
     floors = _floors(system, duration)
     start = time.perf_counter()
-    limit = max_steps or MAX_STEPS
     side = start_companions(system, y0, t_out, name, setting, floors, _windows(scene),
                             limit) if estimate else None
     try:  # the companions stop with the run, whatever ends it (a finished one: at once)
