@@ -178,8 +178,9 @@ def test_a_non_unit_quaternion_is_normalised(given, unit):
 @given(st.lists(st.floats(allow_nan=False, allow_infinity=False, width=64), min_size=3,
                 max_size=3))
 def test_numbers_round_trip_exactly_through_their_repr(values):
-    scene = parse(MINIMAL + f"initial: {{velocity: [{', '.join(map(repr, values))}]}}\n")
-    assert scene.initial.velocity.tolist() == values
+    # a position: speeds have a largest value a run can square (test_a_start_too_fast_...)
+    scene = parse(MINIMAL + f"initial: {{position: [{', '.join(map(repr, values))}]}}\n")
+    assert scene.initial.position.tolist() == values
 
 
 @settings(max_examples=60, deadline=None)
@@ -535,6 +536,30 @@ def test_mesh_body_from_a_vtx_fac_pair_reads_and_protects_both_files(tmp_path):
 
 
 # --- issue 30: values a run cannot use, said before it starts --------------------------------
+def test_a_start_too_fast_to_square_is_refused_with_its_limit():
+    """ω = 1e300 rad/s: a run squares it (|ω|², ½ ω·Jω, |J ω|²) and multiplies the energy by
+    the divergence test's 1e6, all beyond float64: refused at its key, with the limit
+    √(float max / 1e6) / J_max for J_max ≥ 2 (the body's largest moment is 13)."""
+    text = MINIMAL + "initial: {angular_velocity: [1.0e300, 1, 1]}  # <-\n"
+    message = assert_refused(text, "initial.angular_velocity")
+    limit = math.sqrt(np.finfo(float).max / 1e6) / 13.0
+    assert f"{limit:.3g} rad/s at most" in message
+    below = MINIMAL + f"initial: {{angular_velocity: [{0.99 * limit!r}, 0, 0]}}\n"
+    assert parse(below).initial.angular_velocity[0] == pytest.approx(0.99 * limit)
+    text = MINIMAL + "initial: {velocity: [0, 1.0e300, 0]}  # <-\n"
+    assert "m/s at most" in assert_refused(text, "initial.velocity")
+
+
+def test_cli_a_start_too_fast_to_square_is_exit_1_without_warnings(run, tmp_path):
+    """The issue's scene printed numpy RuntimeWarnings with package paths, then failed."""
+    path = tmp_path / "fast.yaml"
+    path.write_text(MINIMAL + "initial: {angular_velocity: [1.0e300, 1, 1]}\n")
+    for integrator in ("auto", "rk4", "dop853", "splitting"):
+        res = run("simulate", str(path), "--integrator", integrator)
+        assert res.exit_code == 1, res.stderr
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) == 1 and "fast.yaml:3: initial.angular_velocity" in lines[0]
+        assert "Warning" not in res.stderr
 
 
 @pytest.mark.parametrize("rtol", ["1.0e-30", "1.0e-16"])

@@ -164,3 +164,15 @@ def test_cli_parallel_universal_axes_exit_1_naming_the_file(tmp_path, run, comma
     assert res.exit_code == 1, res.stderr
     (line,) = res.stderr.strip().splitlines()
     assert "u.yaml:4: joints[0].axes" in line and "internal error" not in line
+
+
+def test_a_joint_rate_too_fast_to_square_is_refused(tmp_path):
+    """A hinge at 1e300 rad/s (numpy overflow warnings, then a run that did not end)."""
+    text = GOOD.replace("time:", "initial: {rates: {elbow: 1.0e300}}\ntime:")
+    message = _refused(text, tmp_path)
+    assert "initial.rates.elbow" in message and "too large for float64" in message
+    text = GOOD.replace("time:", "initial: {bodies: {free: {angular_velocity: [1.0e300, 0, 0]}}}"
+                        "\ntime:").replace("  lower:", f"  free: {ROD}position: [5, 0, 0]}}\n"
+                                           "  lower:")
+    message = _refused(text, tmp_path)
+    assert "initial.bodies.free" in message and "rad/s at most" in message

@@ -20,6 +20,7 @@ import numpy as np
 import yaml
 
 from massprops import tolerances
+from massprops.dynamics.budget import too_fast
 from massprops.dynamics.joints.scene import bind_scene, parse_joints, read_project
 from massprops.dynamics.model import (
     INF,
@@ -381,11 +382,16 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
         body, warnings = _mesh_body(body)
     else:
         body_source, inputs, warnings = "explicit", (), ()
+    initial_fields = read_optional_mapping(fields.get("initial"), _INITIAL_KEYS)
+    fast = too_fast(body.mass, float(body.principal_moments[-1]), initial.velocity,
+                    initial.angular_velocity)
+    if fast is not None:
+        key, problem = fast
+        raise initial_fields[key].error(problem)  # only a given speed can be too large
     scene = Scene(body, initial, forces, time, output, source=source, body_source=body_source,
                   input_files=inputs, warnings=warnings, joints=joints)
     if not joints:
         return scene
-    initial_fields = read_optional_mapping(fields.get("initial"), _INITIAL_KEYS)
     return bind_scene(scene, project=read_project(initial_fields),
                       given=frozenset(initial_fields), joint_fields=joint_fields,
                       initial_fields=initial_fields, initial_field=fields.get("initial"))

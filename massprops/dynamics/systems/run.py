@@ -19,6 +19,7 @@ from massprops.dynamics.budget import (
     MAX_STEPS,
     check_fixed_steps,
     sample_times,
+    too_fast,
 )
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
@@ -36,6 +37,7 @@ from massprops.dynamics.systems.methods import (
 from massprops.dynamics.systems.model import SystemScene
 from massprops.dynamics.systems.outputs import Samples, energies, evaluate, reference
 from massprops.dynamics.systems.system import System
+from massprops.dynamics.systems.tree import kinematics
 from massprops.errors import (
     ComputationError,
     DivergenceError,
@@ -100,6 +102,7 @@ def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
     tree = build_tree(scene)
     system = System(scene, tree, origin)
     q, u, fixed_q, fixed_u = initial_coordinates(scene, tree)
+    _check_speeds(scene, tree, q, u)
     y0 = np.concatenate([q, u])
     notes: list[str] = []
     if system.m:
@@ -134,6 +137,25 @@ def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
         y0 = frame.start(y0, tree.nq)
     system.rank = sol.rank
     return system, y0, notes
+
+
+def _check_speeds(scene: SystemScene, tree, q: np.ndarray, u: np.ndarray) -> None:
+    """SceneError where a body starts faster than a run can square (`budget.too_fast`), at
+    the initial key that gave its speed (its initial.bodies entry, else the first named
+    rate)."""
+    with np.errstate(all="ignore"):  # a start that overflows here is refused below
+        kin = kinematics(tree, q, u)
+        omega = kin.V[:, 0:3]
+        velocity = kin.V[:, 3:6] + np.cross(omega, kin.com)  # of each centre of mass
+    for i, body in enumerate(tree.bodies):
+        fast = too_fast(body.mass, float(np.linalg.eigvalsh(body.inertia).max()),
+                        velocity[i], omega[i])
+        if fast is None:
+            continue
+        rates = [k for k in scene.places if k.startswith("initial.rates.")]
+        key = (f"initial.bodies.{body.name}" if body.name in scene.initial.velocities
+               else rates[0] if rates else "initial")
+        raise SceneError(f"{scene.where(key)}body {body.name!r}: {fast[1]}")
 
 
 def _floors(system: System, duration: float) -> np.ndarray:
