@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -164,6 +165,51 @@ def test_cli_parallel_universal_axes_exit_1_naming_the_file(tmp_path, run, comma
     assert res.exit_code == 1, res.stderr
     (line,) = res.stderr.strip().splitlines()
     assert "u.yaml:4: joints[0].axes" in line and "internal error" not in line
+
+
+def _gap_of_the_four_bar(qa: float, qc: float) -> float:
+    """The largest component (m) of the cut joint D's miss when the crank is turned by qa from
+    the assembly pose and the rocker by qc relative to the coupler, the coupler's own turn qb
+    chosen to bring D's two copies closest: planar geometry in (x, z), turns about +y."""
+    a, b = np.zeros(2), np.array([0.5000000000000001, 0.8660254037844386])
+    c, d = np.array([3.016007650436934, 2.4999487505001956]), np.array([3.0, 0.0])
+
+    def turn(t):
+        return np.array([[math.cos(t), math.sin(t)], [-math.sin(t), math.cos(t)]])
+
+    def miss(qb):
+        b1 = a + turn(qa) @ (b - a)
+        c1 = b1 + turn(qa + qb) @ (c - b)
+        return c1 + turn(qa + qb + qc) @ (d - c) - d
+
+    grid = np.linspace(-math.pi, math.pi, 20001)
+    best = grid[np.argmin([np.linalg.norm(miss(q)) for q in grid])]
+    fine = np.linspace(best - 1e-3, best + 1e-3, 20001)
+    best = fine[np.argmin([np.linalg.norm(miss(q)) for q in fine])]
+    return float(np.abs(miss(best)).max())
+
+
+def test_a_loop_that_cannot_close_at_the_start_is_the_scene_s_mistake(tmp_path):
+    """The four-bar with the crank and the rocker's relative turn both named: no turn of the
+    coupler closes the loop (exit 3, 'the joints cannot be closed at t = 0 s', before). Said at
+    the named positions' line, with the gap left (planar geometry: 0.285 m)."""
+    text = FOUR_BAR.read_text().replace("rates: {A: 2.0}",
+                                        "positions: {A: 0.5, C: 0.3}\n  rates: {A: 2.0}")
+    message = _refused(text, tmp_path)
+    assert "initial.positions.A" in message and "cannot be closed" in message
+    assert "A = 0.5, C = 0.3" in message
+    said = float(message.split("leave it open by ")[1].split(" m")[0])
+    assert said == pytest.approx(_gap_of_the_four_bar(0.5, 0.3), abs=6e-4)
+
+
+def test_cli_a_loop_that_cannot_close_exit_1(tmp_path, run):
+    path = tmp_path / "fb.yaml"
+    path.write_text(FOUR_BAR.read_text().replace(
+        "rates: {A: 2.0}", "positions: {A: 0.5, C: 0.3}\n  rates: {A: 2.0}"))
+    res = run("simulate", str(path))
+    assert res.exit_code == 1, res.stderr
+    (line,) = res.stderr.strip().splitlines()
+    assert "fb.yaml:" in line and "initial.positions.A" in line
 
 
 def test_a_joint_rate_too_fast_to_square_is_refused(tmp_path):

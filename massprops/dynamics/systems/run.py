@@ -36,7 +36,7 @@ from massprops.dynamics.systems.methods import (
 )
 from massprops.dynamics.systems.model import SystemScene
 from massprops.dynamics.systems.outputs import Samples, energies, evaluate, reference
-from massprops.dynamics.systems.system import System
+from massprops.dynamics.systems.system import System, UnclosedLoop
 from massprops.dynamics.systems.tree import kinematics
 from massprops.errors import (
     ComputationError,
@@ -121,11 +121,13 @@ def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
                              f"by {amount}); set initial.project_initial: true to keep the named "
                              "coordinates and rates and solve the others")
         before = y0
-        y0, _, _ = system.project(y0, (fixed_q, fixed_u), iterations=50)
-        if system.residual(y0)[0] > 1e3 * tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS \
-                * tree.size:
-            raise SceneError(f"{scene.where('initial')}the named initial coordinates cannot "
-                             "be met by the loop's other joints; change them")
+        try:
+            y0, _, _ = system.project(y0, (fixed_q, fixed_u), iterations=50)
+        except UnclosedLoop as exc:
+            raise _unclosed(scene, exc.residual) from exc
+        left = system.residual(y0)[0]
+        if left > 1e3 * tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size:
+            raise _unclosed(scene, left)
         moved = float(np.abs(y0 - before).max())
         if scene.initial.project and moved > 0:
             notes.append(f"{scene.where('initial')}projected onto the joints: coordinates and "
@@ -137,6 +139,19 @@ def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
         y0 = frame.start(y0, tree.nq)
     system.rank = sol.rank
     return system, y0, notes
+
+
+def _unclosed(scene: SystemScene, residual: float) -> SceneError:
+    """The refusal of a start whose named coordinates (initial.positions, kept by the
+    projection) leave the loop open by ``residual`` (m, the largest |Φ| the projection left),
+    at the first named one's line."""
+    named = [k for k in scene.places if k.startswith("initial.positions.")]
+    place = scene.where(named[0]) if named else scene.where("initial")
+    given = ", ".join(f"{k} = {', '.join(f'{x:g}' for x in v)}"
+                      for k, v in scene.initial.positions.items())
+    what = f"the named initial coordinates ({given})" if given else "the assembly pose"
+    return SceneError(f"{place}the loop cannot be closed with {what}: the other joints, solved "
+                      f"for the closest fit, leave it open by {residual:.3g} m; change them")
 
 
 def _check_speeds(scene: SystemScene, tree, q: np.ndarray, u: np.ndarray) -> None:

@@ -33,6 +33,14 @@ class SingularPose(ComputationError):
     """The constraint Jacobian lost rank during the run (a dead point) or the projection failed."""
 
 
+class UnclosedLoop(SingularPose):
+    """The projection could not close the loops: ``residual`` (m), the largest |Φ| it left."""
+
+    def __init__(self, message: str, residual: float) -> None:
+        super().__init__(message)
+        self.residual = residual
+
+
 @dataclass(frozen=True, eq=False)
 class Solution:
     """udot (nv,), lam (m,), rank of G, kinematics with the true accelerations, the cut
@@ -212,10 +220,11 @@ class System:
         else:
             phi, g, chol = self.constraint(y)
             if np.abs(phi).max() > 1e3 * atol:
-                raise SingularPose(f"{self.scene.source}: the joints cannot be closed at "
-                                   f"t = {self.time:.6g} s (position residual "
-                                   f"{np.abs(phi).max():.3g} m after {iterations} Newton "
-                                   "steps): the loop cannot be assembled there")
+                left = float(np.abs(phi).max())
+                raise UnclosedLoop(f"{self.scene.source}: the joints cannot be closed at "
+                                   f"t = {self.time:.6g} s (position residual {left:.3g} m "
+                                   f"after {iterations} Newton steps): the loop cannot be "
+                                   "assembled there", left)
         phi, g, chol = self.constraint(y)
         u = y[self.nq:]
         du = -_min_norm(g, chol, g @ u, fixed[1])
