@@ -85,6 +85,11 @@ with 10 digits) passes, while any real mistake (a sign, a swapped axis, a metre 
 a message giving the consistent value. What passes is projected silently: the run always starts
 exactly on the joints."""
 
+QUATERNION_UNIT_RTOL = 1e-9
+"""A scene's quaternion whose norm misses 1 by less than this is normalised silently: one typed
+from cos and sin values with 10 digits misses by ~1e-10. A larger miss ([2, 0, 0, 0], a slipped
+digit) is normalised too, but said: the scene may not mean the rotation it now gets."""
+
 RTOL_FLOOR = 1e-15
 """The smallest relative tolerance an adaptive run accepts (time.rtol, --rtol). A step's result
 is rounded to half an ulp (EPS / 2) per component and its error estimate is a difference of

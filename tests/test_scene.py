@@ -567,3 +567,24 @@ def test_an_rtol_below_what_float64_gives_is_refused_saying_the_smallest(rtol):
     message = assert_refused(BODY + f"time: {{duration: 1, rtol: {rtol}}}  # <-\n", "time.rtol")
     assert "smallest rtol accepted is 1e-15" in message
     assert parse(BODY + "time: {duration: 1, rtol: 1.0e-15}\n").time.rtol == 1e-15
+
+
+def test_an_unknown_top_level_key_names_every_kind_of_scene():
+    """A scene's top level is one body's (body:), a system's (bodies:) or a robot
+    description's (model:): a typo there is told all three, not one body's keys alone."""
+    message = assert_refused(MINIMAL + "bodys: {}  # <-\n", "bodys")
+    assert all(key in message for key in ("bodies:", "model:", "body:", "joints"))
+
+
+@pytest.mark.parametrize(("given", "said"), [
+    ("[2, 0, 0, 0]", "norm was 2"), ("[0, 3, 0, 4]", "norm was 5"),
+    ("[0.7071067812, 0.7071067812, 0, 0]", None),  # typed from cos/sin with 10 digits
+    ("[1, 0, 0, 0]", None),
+])
+def test_a_quaternion_that_is_not_unit_is_normalised_and_said(given, said):
+    scene = parse(MINIMAL + f"initial: {{orientation: {given}}}\n")
+    if said is None:
+        assert scene.notes == ()
+        return
+    (note,) = scene.notes
+    assert note.startswith("scene.yaml:3: initial.orientation: normalised") and said in note

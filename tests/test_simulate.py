@@ -375,3 +375,55 @@ def test_cli_an_rtol_below_what_float64_gives_is_a_usage_error(run, scene_file):
     assert res.exit_code == 2, res.stderr
     (line,) = res.stderr.strip().splitlines()
     assert "--rtol 1e-30" in line and "smallest accepted is 1e-15" in line
+
+
+@pytest.mark.parametrize("options, said", [
+    (("--integrator", "dop853", "--step", "0.001"), "--step 0.001 ignored: dop853 is an adaptive"),
+    (("--integrator", "rk4", "--step", "0.01", "--rtol", "1e-6"), "--rtol 1e-06 ignored: rk4"),
+    (("--integrator", "exact", "--step", "0.01"), "--step 0.01 ignored: exact is a closed form"),
+], ids=["step-with-dop853", "rtol-with-rk4", "step-with-exact"])
+def test_cli_a_setting_the_method_does_not_read_is_said(run, tmp_path, options, said):
+    sc = _write_scene(tmp_path, "body: {mass: 2, inertia: [[1,0,0],[0,2,0],[0,0,3]]}\n"
+                                "initial: {angular_velocity: [0.3, 1.0, 0.2]}\n"
+                                "time: {duration: 0.5}\n")
+    res = run("simulate", sc, *options)
+    assert res.exit_code == 0, res.stderr
+    assert f"massprops: warning: {sc}: {said}" in res.stderr
+
+
+def test_cli_a_system_run_says_what_it_ignores(run):
+    res = run("simulate", SAMPLE_SCENES / "double_pendulum.yaml", "--duration", "0.2",
+              "--step", "0.001")
+    assert res.exit_code == 0, res.stderr
+    assert "--step 0.001 ignored: dop853 is an adaptive method" in res.stderr
+
+
+def test_cli_an_unnormalised_quaternion_is_said(run, tmp_path):
+    sc = _write_scene(tmp_path, "body: {mass: 2, inertia: [[1,0,0],[0,2,0],[0,0,3]]}\n"
+                                "initial: {orientation: [2, 0, 0, 0]}\n"
+                                "time: {duration: 0.5}\n")
+    res = run("simulate", sc)
+    assert res.exit_code == 0, res.stderr
+    assert f"massprops: warning: {sc}:2: initial.orientation: normalised to [1, 0, 0, 0]" \
+        in res.stderr
+
+
+def test_cli_an_interrupted_system_run_is_not_estimated(run, tmp_path, monkeypatch):
+    """Ctrl-C on a system: the summary said 'error estimate None'; the JSON keeps null with
+    "interrupted": true."""
+    from massprops.dynamics.systems import integrate
+    from massprops.dynamics.systems import run as system_run
+
+    real = system_run.simulate_system
+
+    def interrupted(scene, **kw):
+        return real(scene, **{**kw, "progress": _raise_at_second_call()})
+
+    monkeypatch.setattr(integrate, "CALL_STEPS", 10)
+    monkeypatch.setattr(system_run, "simulate_system", interrupted)
+    res = run("simulate", SAMPLE_SCENES / "four_bar.yaml")
+    assert res.exit_code == 130
+    assert "error estimate not estimated (interrupted)" in res.stdout and "None" not in res.stdout
+    res = run("simulate", "--json", SAMPLE_SCENES / "four_bar.yaml")
+    (out,) = json_lines(res.stdout)
+    assert out["interrupted"] is True and out["diagnostics"]["error_estimate"] is None

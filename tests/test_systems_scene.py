@@ -167,6 +167,36 @@ def test_cli_parallel_universal_axes_exit_1_naming_the_file(tmp_path, run, comma
     assert "u.yaml:4: joints[0].axes" in line and "internal error" not in line
 
 
+def test_an_empty_bodies_mapping_says_it_is_empty(tmp_path):
+    message = _refused("bodies: {}\ntime: {duration: 1.0}\n", tmp_path)
+    assert message.startswith("s.yaml:1: bodies:") and "empty" in message
+    assert "got a mapping" not in message
+
+
+@pytest.mark.parametrize("text, key", [
+    (GOOD + "forcez: []\n", "forcez"),
+    (GOOD.replace("bodies:", "model: arm.urdf\nbodies:", 1), "bodies"),
+], ids=["system", "model"])
+def test_an_unknown_top_level_key_of_a_system_names_every_kind(tmp_path, text, key):
+    from massprops.dynamics.systems.robot_scene import parse_model_scene
+
+    read = parse_model_scene if text.startswith("model:") else parse_system
+    with pytest.raises(SceneError) as info:
+        read(text, source="s.yaml", base_dir=tmp_path)
+    message = str(info.value)
+    assert f"{key}: unknown key '{key}'" in message and "did you mean 'body" not in message
+    assert all(kind in message for kind in ("body:", "bodies:", "model:"))
+
+
+def test_a_body_orientation_that_is_not_unit_is_said(tmp_path):
+    text = GOOD.replace("position: [0, 0, -1.5]", "position: [0, 0, -1.5], "
+                        "orientation: [2, 0, 0, 0]")
+    scene = parse_system(text, source="s.yaml", base_dir=tmp_path)
+    (note,) = scene.notes
+    assert note.startswith("s.yaml:3: bodies.lower.orientation: normalised")
+    assert "norm was 2" in note
+
+
 def _gap_of_the_four_bar(qa: float, qc: float) -> float:
     """The largest component (m) of the cut joint D's miss when the crank is turned by qa from
     the assembly pose and the rocker by qc relative to the coupler, the coupler's own turn qb
@@ -222,3 +252,13 @@ def test_a_joint_rate_too_fast_to_square_is_refused(tmp_path):
                                            "  lower:")
     message = _refused(text, tmp_path)
     assert "initial.bodies.free" in message and "rad/s at most" in message
+
+
+def test_a_ball_joint_position_that_is_not_unit_is_said(tmp_path):
+    text = GOOD.replace("type: revolute, bodies: [upper, lower], point: [0, 0, -1], "
+                        "axis: [0, 1, 0]", "type: spherical, bodies: [upper, lower], "
+                        "point: [0, 0, -1]")
+    text = text.replace("time:", "initial: {positions: {elbow: [0, 0, 3, 4]}}\ntime:")
+    _, _, notes = prepare(parse_system(text, source="s.yaml", base_dir=tmp_path))
+    (note,) = notes
+    assert note.startswith("s.yaml:7: initial.positions.elbow: normalised to [0, 0, 0.6, 0.8]")

@@ -129,8 +129,9 @@ def shown(node: yaml.Node) -> str:
     return node.value if len(node.value) <= 40 else node.value[:37] + "..."
 
 
-def _unknown(word: str, known: Sequence[str], what: str) -> str:
-    close = difflib.get_close_matches(word, known, n=1)
+def _unknown(word: str, known: Sequence[str], what: str,
+             candidates: Sequence[str] | None = None) -> str:
+    close = difflib.get_close_matches(word, known if candidates is None else candidates, n=1)
     hint = f"did you mean {close[0]!r}? " if close else ""
     return f"unknown {what} {word!r}; {hint}expected one of: {', '.join(known)}"
 
@@ -147,9 +148,12 @@ def is_str(node: yaml.Node) -> bool:
 
 # --- container readers --------------------------------------------------------------------------
 def read_mapping(field: Field, known: Sequence[str],
-                 required: Mapping[str, str] | None = None) -> dict[str, Field]:
+                 required: Mapping[str, str] | None = None, *, elsewhere: Sequence[str] = (),
+                 alternatives: str = "") -> dict[str, Field]:
     """Children of a mapping by key; refuses unknown and duplicate keys, and missing required ones
-    (``required`` maps each to an example shown in the message)."""
+    (``required`` maps each to an example shown in the message). An unknown key's message may
+    suggest a key of ``elsewhere`` too (keys a mapping of another kind takes at this place) and
+    ends with ``alternatives`` (what those other kinds are)."""
     node = field.node
     if not isinstance(node, yaml.MappingNode):
         raise field.error(f"expected a mapping with keys {', '.join(known)}, got {shown(node)}")
@@ -161,7 +165,10 @@ def read_mapping(field: Field, known: Sequence[str],
         key = key_node.value
         named = field.child(key_node, key)
         if key not in known:
-            raise named.error(_unknown(key, known, "key"))
+            # another kind's own key is not a typo of one: the alternatives say where it goes
+            pool = known if key in elsewhere else (*known, *elsewhere)
+            raise named.error(_unknown(key, known, "key", pool)
+                              + (f"; {alternatives}" if alternatives else ""))
         if key in out:
             raise named.error("duplicate key: YAML would silently keep only the last; keep one")
         out[key] = field.child(value_node, key)

@@ -115,6 +115,23 @@ def check_rtol(rtol: float, who: str) -> None:
                          f"smallest accepted is {RTOL_FLOOR:g}")
 
 
+def ignored_settings(spec: IntegratorSpec, rtol: float | None, step: float | None) -> str | None:
+    """What a run of ``spec`` does not read among the settings its caller gave (``rtol``,
+    ``step``; None: not given), said so that a setting that changes nothing is not taken for
+    one that did, or None: an adaptive method takes rtol, a fixed-step one its step, a closed
+    form neither."""
+    unread = [(name, value) for name, value, takes in (
+        ("rtol", rtol, spec.kind == "adaptive"), ("step", step, spec.kind == "fixed"))
+        if value is not None and not takes]
+    if not unread:
+        return None
+    said = " and ".join(f"{setting_ref(name)} {value:g}" for name, value in unread)
+    takes = {"adaptive": f"an adaptive method: its steps follow {setting_ref('rtol')}",
+             "fixed": f"a fixed-step method: it takes {setting_ref('step')}",
+             "exact": "a closed form: it takes no steps"}[spec.kind]
+    return f"{said} ignored: {spec.name} is {takes}"
+
+
 def check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats) -> None:
     """Shapes and dtypes of the contract, each failure one line naming what was expected."""
     ny = 7 if rot_only else 13

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from massprops.dynamics.model import OutputSettings, TimeSettings
-from massprops.dynamics.scene import _output
+from massprops.dynamics.scene import _output, read_top
 from massprops.dynamics.systems.description import (
     BASES,
     INERTIALS,
@@ -41,7 +41,7 @@ from massprops.dynamics.systems.scene import (
     system_time,
     with_time,
 )
-from massprops.dynamics.yamlnodes import Field, compose, read_choice, read_mapping, read_string
+from massprops.dynamics.yamlnodes import Field, compose, read_choice, read_string
 from massprops.errors import SceneError
 
 __all__ = ["DESCRIPTION_SUFFIXES", "description_scene", "is_description", "load_any_system",
@@ -49,7 +49,6 @@ __all__ = ["DESCRIPTION_SUFFIXES", "description_scene", "is_description", "load_
 
 DESCRIPTION_SUFFIXES = (".urdf", ".sdf", ".xml", ".xacro")
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
-_KEYS = ("model", "inertials", "base", "initial", "forces", "time", "output")
 
 
 def is_description(path: str | os.PathLike) -> bool:
@@ -78,8 +77,8 @@ def load_any_system(path: str | os.PathLike, duration: float | None = None) -> S
 def parse_model_scene(text: str, *, source: str, base_dir: Path) -> SystemScene:
     """A scene with ``model:`` (see the module doc). Raises SceneError, RobotModelError."""
     root = compose(text, source)
-    fields = read_mapping(Field(root, "", source), _KEYS,
-                          {"model": "model: arm.urdf", "time": "time: {duration: 2.0}"})
+    fields = read_top(Field(root, "", source), "model",
+                      {"model": "model: arm.urdf", "time": "time: {duration: 2.0}"})
     file = base_dir / read_string(fields["model"], "a URDF, SDF or MJCF file name")
     if not file.is_file():
         raise fields["model"].error(f"no such file {file} (relative paths start at the scene "

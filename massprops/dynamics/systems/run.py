@@ -23,6 +23,7 @@ from massprops.dynamics.budget import (
 )
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
+from massprops.dynamics.integrators.base import ignored_settings
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
 from massprops.dynamics.systems.falling import falling_frame
 from massprops.dynamics.systems.integrate import integrate
@@ -101,10 +102,10 @@ def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
     scene, origin = localized(scene)  # about the assembly's middle, wherever it sits
     tree = build_tree(scene)
     system = System(scene, tree, origin)
-    q, u, fixed_q, fixed_u = initial_coordinates(scene, tree)
+    notes: list[str] = []
+    q, u, fixed_q, fixed_u = initial_coordinates(scene, tree, notes)
     _check_speeds(scene, tree, q, u)
     y0 = np.concatenate([q, u])
-    notes: list[str] = []
     if system.m:
         pos, vel = system.residual(y0)
         speed = max(float(np.abs(u).max(initial=0.0)) * tree.size, tree.size
@@ -173,6 +174,14 @@ def _check_speeds(scene: SystemScene, tree, q: np.ndarray, u: np.ndarray) -> Non
         raise SceneError(f"{scene.where(key)}body {body.name!r}: {fast[1]}")
 
 
+def _spec(name: str):
+    """The registry's record of method ``name``."""
+    # deferred: the registry imports the one-body kernels' modules (the record only here)
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    return INTEGRATORS[name]
+
+
 def _floors(system: System, duration: float) -> np.ndarray:
     """Smallest error scale per component: 1 rad (or the size for a length) for coordinates,
     those per duration for rates."""
@@ -225,6 +234,9 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     limit = max_steps or MAX_STEPS
     if kind_of(name) == "fixed":  # the run bound, before the run: its step count is known
         check_fixed_steps(name, duration, setting, len(_windows(scene)), scene.source, limit)
+    ignored = ignored_settings(_spec(name), rtol, step)
+    if ignored is not None:
+        notes.append(f"{scene.source}: {ignored}")
     t_out = sample_times(duration, every if every is not None else scene.output.every,
                          scene.source)
     floors = _floors(system, duration)

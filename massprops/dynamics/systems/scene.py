@@ -29,6 +29,7 @@ from massprops.dynamics.scene import (
     _quaternion,
     _time,
     _window,
+    read_top,
 )
 from massprops.dynamics.systems.model import (
     ONE_AXIS,
@@ -64,7 +65,6 @@ from massprops.rotation import quat_to_matrix
 
 __all__ = ["is_system_text", "load_system", "parse_system"]
 
-_TOP_KEYS = ("bodies", "joints", "initial", "forces", "time", "output")
 _PLACEMENT = ("position", "orientation")
 _JOINT_KEYS = {
     "spherical": ("point",), "revolute": ("point", "axis"), "prismatic": ("point", "axis"),
@@ -96,10 +96,11 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
     if root is None:
         raise SceneError(f"{source}:1: the file is empty")
     top = Field(root, "", source)
-    fields = read_mapping(top, _TOP_KEYS, {"bodies": "bodies: {crank: {mass: 1, ...}}",
-                                           "time": "time: {duration: 10.0}"})
+    fields = read_top(top, "bodies", {"bodies": "bodies: {crank: {mass: 1, ...}}",
+                                      "time": "time: {duration: 10.0}"})
     places: dict[str, str] = {}
-    specs, names = _bodies(fields["bodies"], base_dir, places)
+    notes: list[str] = []
+    specs, names = _bodies(fields["bodies"], base_dir, places, notes)
     index = {name: i for i, name in enumerate(names)}
     joints = _joints(fields.get("joints"), index, places)
     gravity, forces, springs, drags = _forces(fields.get("forces"), index)
@@ -118,7 +119,7 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
     joints = tuple(_fixed_point(j, bodies) for j in joints)
     return SystemScene(tuple(bodies), joints, gravity, forces, springs, initial, time, output,
                        source=source, input_files=tuple(inputs), warnings=tuple(warnings),
-                       places=places, drags=drags)
+                       places=places, drags=drags, notes=tuple(notes))
 
 
 def system_time(field: Field) -> TimeSettings:
@@ -148,9 +149,12 @@ def _fixed_point(joint: SystemJoint, bodies: list) -> SystemJoint:
 
 
 # --- bodies -------------------------------------------------------------------------------------
-def _bodies(field: Field, base_dir: Path, places: dict):
-    if not isinstance(field.node, yaml.MappingNode) or not field.node.value:
+def _bodies(field: Field, base_dir: Path, places: dict, notes: list[str]):
+    if not isinstance(field.node, yaml.MappingNode):
         raise field.error(f"expected a mapping name -> body, got {shown(field.node)}")
+    if not field.node.value:
+        raise field.error("the mapping is empty: a system needs at least one body, e.g. "
+                          "bodies: {crank: {mass: 1.0, inertia: [[...]], position: [0, 0, 0]}}")
     specs, names = [], []
     for key_node, value_node in field.node.value:
         name = key_node.value if is_str(key_node) else None
@@ -175,7 +179,7 @@ def _bodies(field: Field, base_dir: Path, places: dict):
         if "position" in placed:
             placement["position"] = read_vector(placed["position"])
         if "orientation" in placed:
-            placement["orientation"] = _quaternion(placed["orientation"])
+            placement["orientation"] = _quaternion(placed["orientation"], notes)
         places[f"bodies.{name}"] = item.where()
         specs.append((spec, placement))
         names.append(name)
