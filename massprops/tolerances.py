@@ -116,6 +116,20 @@ with 10 digits) passes, while any real mistake (a sign, a swapped axis, a metre 
 a message giving the consistent value. What passes is projected silently: the run always starts
 exactly on the joints."""
 
+QUATERNION_UNIT_RTOL = 1e-9
+"""A scene's quaternion whose norm misses 1 by less than this is normalised silently: one typed
+from cos and sin values with 10 digits misses by ~1e-10. A larger miss ([2, 0, 0, 0], a slipped
+digit) is normalised too, but said: the scene may not mean the rotation it now gets."""
+
+RTOL_FLOOR = 1e-15
+"""The smallest relative tolerance an adaptive run accepts (time.rtol, --rtol). A step's result
+is rounded to half an ulp (EPS / 2) per component and its error estimate is a difference of
+stage sums that carries a few ulps more, so a tolerance below a few ulps asks for digits float64
+does not have: the runs then stall, or their error stops falling (DOP853 on the system samples:
+the same 1e-13 to 1e-10 from rtol 1e-14 to 1e-17, then steps collapsing by 1e-20). 1e-15 is
+~4.5 ulps; Hairer and Wanner's dop853.f refuses below 10 × its unit round-off (2.3e-15), the same
+order."""
+
 WINDING_ATOL = 0.25
 """A winding number further than this from an integer belongs to a point on (or next to)
 another piece's surface: inconclusive, ignored. Round-off is ~1e-12; a point on a face gives

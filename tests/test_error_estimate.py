@@ -10,10 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from massprops.dynamics.accuracy import Scales, global_estimate, state_error
+from massprops.dynamics.accuracy import UNRESOLVED_ESTIMATE, Scales, global_estimate, state_error
 from massprops.dynamics.scene import load_scene
 from massprops.dynamics.simulate import simulate
 from massprops.dynamics.systems import stiffness
+from massprops.errors import ComputationError
+from massprops.rotation import rotation_angle_between
 
 SCENES = Path(__file__).resolve().parent.parent / "sample_scenes"
 
@@ -119,3 +121,91 @@ def test_a_failed_probe_or_runaway_companion_gives_no_estimate_not_infinity(monk
                         lambda *_args: math.inf)
     sc = load_scene(SCENES / "unstable.yaml")
     assert simulate(sc, integrator="implicit", step=0.008).diagnostics["error_estimate"] is None
+
+
+# --- a step that turns a body by radians (issue 30) ----------------------------------------------
+def test_one_step_s_error_on_a_rotation_is_the_method_s_own():
+    """`turn_error` against the stability functions written out by hand: rk4 multiplies a
+    rotation's quaternion (y' = i φ y per step φ = θ/2) by its Taylor polynomial of degree 4,
+    the implicit midpoint rule by (1 + iφ/2) / (1 − iφ/2), which turns by 2 atan(φ/2) exactly:
+    the body by 4 atan(θ/4)."""
+    from massprops.dynamics.accuracy import followed_turn, turn_error
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    for theta in (0.01, 0.3, 1.0, 2.0, 3.5):
+        phi = theta / 2
+        taylor = 1 + 1j * phi - phi**2 / 2 - 1j * phi**3 / 6 + phi**4 / 24
+        rk4 = 2 * abs(np.angle(taylor) - phi)
+        assert turn_error(INTEGRATORS["rk4"].tableau, theta) == pytest.approx(rk4, rel=1e-9,
+                                                                               abs=1e-15)
+        midpoint = theta - 4 * math.atan(theta / 4)
+        assert turn_error(INTEGRATORS["midpoint"].tableau, theta) == pytest.approx(
+            midpoint, rel=1e-9, abs=1e-15)
+    # order p: the error of one step falls as θ^(p+1)
+    for name in ("rk4", "midpoint", "implicit", "dop853"):
+        spec = INTEGRATORS[name]
+        small = [turn_error(spec.tableau, t) for t in (1.0, 0.5)]
+        # (a phase error: Radau's leading term, C z^6, is real on the imaginary axis: θ^7)
+        assert spec.order + 0.8 < math.log2(small[0] / small[1]) < spec.order + 2.2
+        assert 1.0 < followed_turn(spec.tableau) < 20.0
+
+
+SPIN, DURATION = 10.0, 10.0
+SYMMETRIC = "{mass: 1.0, inertia: [[1, 0, 0], [0, 1, 0], [0, 0, 2]]}"
+FAST_RUNS = [("rk4", {"step": 0.1}), ("rk4", {"step": 0.3}), ("midpoint", {"step": 0.1}),
+             ("implicit", {"step": 1.0}), ("dop853", {"rtol": 0.5}), ("dop853", {"rtol": 0.05})]
+
+
+def _spin_scene(tmp_path, body: str, omega: str, duration: float, extra: str = ""):
+    path = tmp_path / "spin.yaml"
+    path.write_text(f"body: {body}\ninitial: {{angular_velocity: {omega}, "
+                    f"angular_velocity_frame: body}}\n{extra}time: {{duration: {duration}}}\n")
+    return load_scene(path)
+
+
+@pytest.mark.parametrize("method, setting", FAST_RUNS,
+                         ids=[f"{m}-{next(iter(s.values()))}" for m, s in FAST_RUNS])
+def test_a_step_that_turns_a_body_by_radians_never_claims_accuracy(tmp_path, method, setting):
+    """A symmetric body spinning about its axis at 10 rad/s turns uniformly: q(t) =
+    [cos(ωt/2), 0, 0, sin(ωt/2)], the truth each run is measured against. Where the run's
+    steps turn it by a radian or more, its estimate is at least 1e-2 and at least its true
+    error."""
+    sc = _spin_scene(tmp_path, SYMMETRIC, f"[0, 0, {SPIN}]", DURATION)
+    res = simulate(sc, integrator=method, **setting)
+    turn = SPIN * DURATION / res.steps
+    assert turn >= 1.0  # the case this test is about
+    traj = res.trajectory
+    half = 0.5 * SPIN * traj.t
+    truth = np.column_stack([np.cos(half), 0 * half, 0 * half, np.sin(half)])
+    true = float(np.max(rotation_angle_between(traj.orientation, truth)))
+    estimate = res.diagnostics["error_estimate"]
+    assert estimate is not None and estimate >= 1e-2, (turn, estimate, true)
+    assert estimate >= 0.9 * true, (turn, estimate, true)
+
+
+TORQUED = [("rk4", {}), ("midpoint", {}), ("implicit", {}), ("dop853", {"rtol": 0.5})]
+
+
+@pytest.mark.parametrize("body", ["{mass: 2.0, inertia: [[1, 0, 0], [0, 2, 0], [0, 0, 3]]}",
+                                  SYMMETRIC], ids=["asymmetric", "symmetric"])
+@pytest.mark.parametrize("method, setting", TORQUED, ids=[m for m, _ in TORQUED])
+def test_a_torqued_body_over_1e12_s_is_not_called_accurate(tmp_path, body, method, setting):
+    """The issue's run: a torque about a principal axis from rest, 1e12 s at the default
+    step (duration / 1000 = 1e9 s): the body turns by n t² / (2 J) ~ 1e23 rad, far beyond
+    anything a step of 1e9 s follows (or float64 resolves). ω = n t / J is linear, which every
+    method integrates exactly, and the companions agreed with the run by chance: rk4 said
+    1.5e-14. Now the estimate says the run resolves nothing, and a warning says so (or the run
+    fails, exit 3, saying what to change: no claim either)."""
+    torque = "forces: [{type: torque, vector: [0, 0, 1], frame: body}]\n"
+    sc = _spin_scene(tmp_path, body, "[0, 0, 0]", 1e12, torque)
+    try:
+        res = simulate(sc, integrator=method, **setting)
+    except ComputationError as exc:  # a failure claims nothing; it says what to change
+        assert "step" in str(exc) or "duration" in str(exc), exc
+        return
+    moment = 3.0 if "3]]" in body else 2.0
+    turned = 0.5 * 1e12**2 / moment
+    assert turned / res.steps > 1e3
+    estimate = res.diagnostics["error_estimate"]
+    assert estimate is not None and estimate >= UNRESOLVED_ESTIMATE, estimate
+    assert any("not to be trusted" in note for note in res.notes)

@@ -178,8 +178,9 @@ def test_a_non_unit_quaternion_is_normalised(given, unit):
 @given(st.lists(st.floats(allow_nan=False, allow_infinity=False, width=64), min_size=3,
                 max_size=3))
 def test_numbers_round_trip_exactly_through_their_repr(values):
-    scene = parse(MINIMAL + f"initial: {{velocity: [{', '.join(map(repr, values))}]}}\n")
-    assert scene.initial.velocity.tolist() == values
+    # a position: speeds have a largest value a run can square (test_a_start_too_fast_...)
+    scene = parse(MINIMAL + f"initial: {{position: [{', '.join(map(repr, values))}]}}\n")
+    assert scene.initial.position.tolist() == values
 
 
 @settings(max_examples=60, deadline=None)
@@ -532,3 +533,58 @@ def test_mesh_body_from_a_vtx_fac_pair_reads_and_protects_both_files(tmp_path):
     assert scene.input_files == (tmp_path / "box.fac", tmp_path / "box.vtx")
     np.testing.assert_allclose(scene.body.center_of_mass, cuboid_truth(SIDES, OFFSET, 6)[0],
                                rtol=1e-12)
+
+
+# --- issue 30: values a run cannot use, said before it starts --------------------------------
+def test_a_start_too_fast_to_square_is_refused_with_its_limit():
+    """ω = 1e300 rad/s: a run squares it (|ω|², ½ ω·Jω, |J ω|²) and multiplies the energy by
+    the divergence test's 1e6, all beyond float64: refused at its key, with the limit
+    √(float max / 1e6) / J_max for J_max ≥ 2 (the body's largest moment is 13)."""
+    text = MINIMAL + "initial: {angular_velocity: [1.0e300, 1, 1]}  # <-\n"
+    message = assert_refused(text, "initial.angular_velocity")
+    limit = math.sqrt(np.finfo(float).max / 1e6) / 13.0
+    assert f"{limit:.3g} rad/s at most" in message
+    below = MINIMAL + f"initial: {{angular_velocity: [{0.99 * limit!r}, 0, 0]}}\n"
+    assert parse(below).initial.angular_velocity[0] == pytest.approx(0.99 * limit)
+    text = MINIMAL + "initial: {velocity: [0, 1.0e300, 0]}  # <-\n"
+    assert "m/s at most" in assert_refused(text, "initial.velocity")
+
+
+def test_cli_a_start_too_fast_to_square_is_exit_1_without_warnings(run, tmp_path):
+    """The issue's scene printed numpy RuntimeWarnings with package paths, then failed."""
+    path = tmp_path / "fast.yaml"
+    path.write_text(MINIMAL + "initial: {angular_velocity: [1.0e300, 1, 1]}\n")
+    for integrator in ("auto", "rk4", "dop853", "splitting"):
+        res = run("simulate", str(path), "--integrator", integrator)
+        assert res.exit_code == 1, res.stderr
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) == 1 and "fast.yaml:3: initial.angular_velocity" in lines[0]
+        assert "Warning" not in res.stderr
+
+
+@pytest.mark.parametrize("rtol", ["1.0e-30", "1.0e-16"])
+def test_an_rtol_below_what_float64_gives_is_refused_saying_the_smallest(rtol):
+    message = assert_refused(BODY + f"time: {{duration: 1, rtol: {rtol}}}  # <-\n", "time.rtol")
+    assert "smallest rtol accepted is 1e-15" in message
+    assert parse(BODY + "time: {duration: 1, rtol: 1.0e-15}\n").time.rtol == 1e-15
+
+
+def test_an_unknown_top_level_key_names_every_kind_of_scene():
+    """A scene's top level is one body's (body:), a system's (bodies:) or a robot
+    description's (model:): a typo there is told all three, not one body's keys alone."""
+    message = assert_refused(MINIMAL + "bodys: {}  # <-\n", "bodys")
+    assert all(key in message for key in ("bodies:", "model:", "body:", "joints"))
+
+
+@pytest.mark.parametrize(("given", "said"), [
+    ("[2, 0, 0, 0]", "norm was 2"), ("[0, 3, 0, 4]", "norm was 5"),
+    ("[0.7071067812, 0.7071067812, 0, 0]", None),  # typed from cos/sin with 10 digits
+    ("[1, 0, 0, 0]", None),
+])
+def test_a_quaternion_that_is_not_unit_is_normalised_and_said(given, said):
+    scene = parse(MINIMAL + f"initial: {{orientation: {given}}}\n")
+    if said is None:
+        assert scene.notes == ()
+        return
+    (note,) = scene.notes
+    assert note.startswith("scene.yaml:3: initial.orientation: normalised") and said in note

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -316,3 +317,113 @@ def test_cache_folders_unused_for_a_month_are_pruned(tmp_path):
     dyn._prune_unused(tmp_path, keep=tmp_path / "numba-current")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["numba-current", "numba-recent",
                                                           "unrelated"]
+
+
+# --- issue 30: absurd settings get the right advice; what a run ignores is said ----------------
+SAMPLE_SCENES = Path(__file__).resolve().parent.parent / "sample_scenes"
+
+
+def test_one_run_bound_for_one_body_and_systems():
+    """budget.MAX_STEPS (2e7, what --max-steps says) is the bound of every run: systems kept a
+    bound of their own (2e6), which stopped a one-body rk4 run at a tenth of it."""
+    import inspect
+
+    from massprops.dynamics import budget, precision
+    from massprops.dynamics.systems import integrate
+
+    assert budget.MAX_STEPS == 20_000_000
+    assert inspect.signature(integrate.integrate).parameters["max_steps"].default \
+        == budget.MAX_STEPS
+    for module in (integrate, precision):
+        assert getattr(module, "MAX_STEPS", budget.MAX_STEPS) is budget.MAX_STEPS
+
+
+def test_a_fixed_step_system_run_beyond_the_bound_is_refused_up_front(run):
+    """2.5e7 steps of rk4: refused before it runs, saying the bound and the step that fits
+    (a system's run went on until its own bound of 2e6 steps, then stopped)."""
+    res = run("simulate", SAMPLE_SCENES / "double_pendulum.yaml", "--integrator", "rk4",
+              "--step", "4e-7")
+    assert res.exit_code == 3, res.stderr
+    (line,) = res.stderr.strip().splitlines()
+    assert "2.5e+07 steps" in line and "2e+07" in line and "at least 5e-07 s" in line
+
+
+@pytest.mark.parametrize("duration", ["1e8", "1e12"])
+def test_a_duration_beyond_what_float64_resolves_is_said_not_called_stiff(run, duration):
+    """The double pendulum (fastest rate ~6/s) over 1e8 s and 1e12 s: dop853's step fell below
+    1e-14 of the run at t = 0, which said 'too stiff ... run the implicit method' (and the
+    implicit method then failed too): the system is not stiff; the duration is the problem."""
+    res = run("simulate", SAMPLE_SCENES / "double_pendulum.yaml", "--duration", duration)
+    assert res.exit_code == 3, res.stderr
+    (line,) = res.stderr.strip().splitlines()
+    assert "not stiff" in line and "--duration" in line and "t·eps" in line
+    assert "implicit" not in line and "too stiff" not in line
+
+
+def test_an_implicit_run_whose_resolving_step_cannot_fit_says_so(run):
+    res = run("simulate", SAMPLE_SCENES / "double_pendulum.yaml", "--duration", "1e8",
+              "--integrator", "implicit")
+    assert res.exit_code == 3, res.stderr
+    (line,) = res.stderr.strip().splitlines()
+    assert "Newton" in line and "--duration" in line and "2e+07 steps" in line
+
+
+@pytest.mark.parametrize("scene_file", ["double_pendulum.yaml", "dzhanibekov.yaml"])
+def test_cli_an_rtol_below_what_float64_gives_is_a_usage_error(run, scene_file):
+    res = run("simulate", SAMPLE_SCENES / scene_file, "--rtol", "1e-30",
+              "--integrator", "dop853")
+    assert res.exit_code == 2, res.stderr
+    (line,) = res.stderr.strip().splitlines()
+    assert "--rtol 1e-30" in line and "smallest accepted is 1e-15" in line
+
+
+@pytest.mark.parametrize("options, said", [
+    (("--integrator", "dop853", "--step", "0.001"), "--step 0.001 ignored: dop853 is an adaptive"),
+    (("--integrator", "rk4", "--step", "0.01", "--rtol", "1e-6"), "--rtol 1e-06 ignored: rk4"),
+    (("--integrator", "exact", "--step", "0.01"), "--step 0.01 ignored: exact is a closed form"),
+], ids=["step-with-dop853", "rtol-with-rk4", "step-with-exact"])
+def test_cli_a_setting_the_method_does_not_read_is_said(run, tmp_path, options, said):
+    sc = _write_scene(tmp_path, "body: {mass: 2, inertia: [[1,0,0],[0,2,0],[0,0,3]]}\n"
+                                "initial: {angular_velocity: [0.3, 1.0, 0.2]}\n"
+                                "time: {duration: 0.5}\n")
+    res = run("simulate", sc, *options)
+    assert res.exit_code == 0, res.stderr
+    assert f"massprops: warning: {sc}: {said}" in res.stderr
+
+
+def test_cli_a_system_run_says_what_it_ignores(run):
+    res = run("simulate", SAMPLE_SCENES / "double_pendulum.yaml", "--duration", "0.2",
+              "--step", "0.001")
+    assert res.exit_code == 0, res.stderr
+    assert "--step 0.001 ignored: dop853 is an adaptive method" in res.stderr
+
+
+def test_cli_an_unnormalised_quaternion_is_said(run, tmp_path):
+    sc = _write_scene(tmp_path, "body: {mass: 2, inertia: [[1,0,0],[0,2,0],[0,0,3]]}\n"
+                                "initial: {orientation: [2, 0, 0, 0]}\n"
+                                "time: {duration: 0.5}\n")
+    res = run("simulate", sc)
+    assert res.exit_code == 0, res.stderr
+    assert f"massprops: warning: {sc}:2: initial.orientation: normalised to [1, 0, 0, 0]" \
+        in res.stderr
+
+
+def test_cli_an_interrupted_system_run_is_not_estimated(run, tmp_path, monkeypatch):
+    """Ctrl-C on a system: the summary said 'error estimate None'; the JSON keeps null with
+    "interrupted": true."""
+    from massprops.dynamics.systems import integrate
+    from massprops.dynamics.systems import run as system_run
+
+    real = system_run.simulate_system
+
+    def interrupted(scene, **kw):
+        return real(scene, **{**kw, "progress": _raise_at_second_call()})
+
+    monkeypatch.setattr(integrate, "CALL_STEPS", 10)
+    monkeypatch.setattr(system_run, "simulate_system", interrupted)
+    res = run("simulate", SAMPLE_SCENES / "four_bar.yaml")
+    assert res.exit_code == 130
+    assert "error estimate not estimated (interrupted)" in res.stdout and "None" not in res.stdout
+    res = run("simulate", "--json", SAMPLE_SCENES / "four_bar.yaml")
+    (out,) = json_lines(res.stdout)
+    assert out["interrupted"] is True and out["diagnostics"]["error_estimate"] is None

@@ -95,6 +95,16 @@ def say_traceback(text: str) -> None:
     click.echo(fitted(cli_text(text)).rstrip("\n"), err=True)
 
 
+def estimate_said(value: float | None, interrupted: bool, spec: str = ".3g") -> str:
+    """A run's error estimate in a table: the number (in the format ``spec``), or why there is
+    none (a run stopped by Ctrl-C has no companion runs to compare with; otherwise a companion
+    diverged or was cut off by the run bound)."""
+    if value is not None:
+        return format(value, spec)
+    return ("not estimated (interrupted)" if interrupted
+            else "not estimated (its companion runs failed or hit the run bound)")
+
+
 def say_note(message: str) -> None:
     """A note on stderr while something slow and one-off happens (never on --json stdout)."""
     click.echo(f"massprops: {message}", err=True)

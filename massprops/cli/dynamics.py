@@ -12,6 +12,7 @@ from massprops.cli.common import (
     RegistryChoice,
     check_outputs,
     emit_json,
+    estimate_said,
     guarded,
     positive,
     robot_file_options,
@@ -266,6 +267,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     scene = load_any_system(scene_path, duration, **(description or {}))
     for w in scene.warnings:
         say_warning(scene_path, w)
+    say_notes(scene.notes)  # already placed: "scene.yaml:LINE: ..."
     out = output_path or scene.output.file
     sampling = every or scene.output.every
     if sampling is None and (out or plot_path):
@@ -297,7 +299,8 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     diag = data["diagnostics"]
     click.echo(f"{scene_path}: {len(scene.bodies)} bodies, {len(scene.joints)} joints, "
                f"{diag['degrees_of_freedom']} degrees of freedom; t = {data['final']['t']:g} s "
-               f"in {data['steps']} steps; error estimate {diag['error_estimate']}")
+               f"in {data['steps']} steps; error estimate "
+               f"{estimate_said(diag['error_estimate'], result.interrupted, '')}")
     for name, joint in data["final"]["joints"].items():
         held = f", holding {joint['holding']}" if "holding" in joint else ""
         click.echo(f"  {name} ({joint['type']}): q = {joint['coordinates']}, "

@@ -17,7 +17,7 @@ from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
 
-from massprops.cli.common import cli_text
+from massprops.cli.common import cli_text, estimate_said
 
 # a pipe gets no colour (rich's own check) and a fixed width wide enough for the tables, rather
 # than wrapping at 80 columns where no one will resize a window
@@ -180,11 +180,11 @@ def print_simulation(scene, result) -> None:
         if joint["torque_world"] is not None:
             _row(head, f"joint {k} torque on body [N·m, world]",
                  "(" + ", ".join(f"{x:.6g}" for x in joint["torque_world"]) + ")")
-    why_none = {"error_estimate": "n/a (run interrupted, or its companion run diverged)",
-                "constraint_drift": "n/a (no joints)"}
     for key, value in result.diagnostics.items():
-        _row(head, key.replace("_", " "), f"{value:.3g}" if value is not None
-             else why_none.get(key, "n/a (not conserved in this scene)"))
+        said = (estimate_said(value, result.interrupted) if key == "error_estimate"
+                else "n/a (no joints)" if value is None and key == "constraint_drift"
+                else "n/a (not conserved in this scene)" if value is None else f"{value:.3g}")
+        _row(head, key.replace("_", " "), said)
     if result.interrupted:
         _row(head, "interrupted", "yes: the results stop at the time above")
     _print_table(head)

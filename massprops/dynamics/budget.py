@@ -17,7 +17,8 @@ reference and ladder runs of ``precision`` (whose fixed-step ladders leave out r
 ``precision.MAX_STEPS`` anyway). The closed form takes no steps; only its samples are bounded.
 
 The other limits one body and a system share live here too: the output times (`sample_times`),
-`auto`'s explicit-step budget and the energy growth that means divergence.
+`auto`'s explicit-step budget, the energy growth that means divergence and the largest speeds a
+start may have (`too_fast`).
 """
 
 from __future__ import annotations
@@ -29,11 +30,13 @@ import numpy as np
 from massprops.errors import RunBudgetError, setting_ref
 
 MAX_STEPS = 20_000_000
-"""Steps one run may take unless the caller says otherwise (``simulate(max_steps=)``, the CLI's
---max-steps). Measured cost per step (warm, one shared core, a body on a damped spring): rk4
-~1 µs, midpoint ~2.5 µs, dop853 ~5 µs, implicit ~5 µs, splitting ~8 µs, splitting6 ~50 µs (nine
-drifts per step), so a run reaches the bound after ~20 s (rk4) to ~2 min (dop853, implicit), 15
-min at most (splitting6), and a fixed-step run that needs more is refused in the first place."""
+"""Steps one run may take unless the caller says otherwise (``simulate(max_steps=)``,
+``simulate_system(max_steps=)``, the CLI's --max-steps), one body and systems alike (the one
+bound: systems once had their own, 2e6, which stopped a one-body rk4 run there). Measured cost
+per step (warm, one shared core, a body on a damped spring, the one-body kernels): rk4 ~1 µs,
+midpoint ~2.5 µs, dop853 ~5 µs, implicit ~5 µs, splitting ~8 µs, splitting6 ~50 µs (nine drifts
+per step), so a run reaches the bound after ~20 s (rk4) to ~2 min (dop853, implicit), 15 min at
+most (splitting6), and a fixed-step run that needs more is refused in the first place."""
 
 PROJECT_AFTER = 1_000_000
 """Steps an adaptive run takes before its pace is used to project the whole run (a start whose
@@ -100,6 +103,40 @@ resolve the stiffest rate over the run (RK-type stability limit ~2.8 / rate)."""
 
 ENERGY_BLOWUP = 1e6
 """A conservative or dissipative scene whose energy grows by this factor of its scale diverged."""
+
+SQUARE_LIMIT = float(np.finfo(np.float64).max) / ENERGY_BLOWUP
+"""1.8e302: the largest square of a start's speeds a run may form (`too_fast`)."""
+
+
+def magnitude(vector) -> float:
+    """|vector|, taken without overflow or underflow (scaled by its largest component first)."""
+    v = np.asarray(vector, dtype=np.float64)
+    largest = float(np.abs(v).max(initial=0.0))
+    return largest * float(np.linalg.norm(v / largest)) if largest > 0 else 0.0
+
+
+def too_fast(mass: float, moment: float, velocity, angular_velocity) -> tuple[str, str] | None:
+    """(key, problem) when a body of ``mass`` (kg) and largest principal moment ``moment``
+    (kg·m²) cannot start at ``velocity`` (m/s; key "velocity") or ``angular_velocity`` (rad/s;
+    key "angular_velocity"), else None. A run squares a start's speeds: |v|², |ω|², the kinetic
+    energy ½ m |v|² + ½ ω·Jω, the momenta |m v|² and |J ω|², and its divergence test multiplies
+    that energy by ENERGY_BLOWUP; each must stay a float64 number, at most SQUARE_LIMIT, so
+    |v| ≤ √SQUARE_LIMIT / max(1, √(m / 2), m) (the largest of v², ½ m v², m² v² is under the
+    limit) and |ω| alike with the moment. Beyond, the run's numbers overflow (1e300 rad/s: numpy
+    warned of overflows, then the step was 0 s)."""
+    for key, speed, weight, unit in (("velocity", velocity, mass, "m/s"),
+                                     ("angular_velocity", angular_velocity, moment, "rad/s")):
+        limit = math.sqrt(SQUARE_LIMIT) / max(1.0, math.sqrt(weight / 2.0), weight)
+        size = magnitude(speed)
+        if not size <= limit:
+            what = ("½ m |v|², |v|², |m v|²" if key == "velocity"
+                    else "the kinetic energy ½ ω·Jω, |ω|², |J ω|²")
+            return key, (f"a speed of {size:.3g} {unit} is too large for float64: a run squares "
+                         f"it ({what}) and needs room for its divergence test "
+                         f"({ENERGY_BLOWUP:.0e} times the energy), so this body (mass "
+                         f"{mass:.3g} kg, largest moment {moment:.3g} kg·m²) may start at "
+                         f"{limit:.3g} {unit} at most")
+    return None
 
 
 DIAGNOSTIC_SAMPLES = 100

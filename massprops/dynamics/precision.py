@@ -36,8 +36,9 @@ RTOL_LADDER = tuple(10.0**-k for k in range(3, 13))
 STEP_HALVINGS = 10
 """Fixed-step ladder: h0, h0/2, ..., h0/2^9 with h0 = 16 × the scene's default step."""
 
-MAX_STEPS = 2_000_000
-"""Fixed-step settings that would take more steps than this are left out of the ladder."""
+MAX_RUNG_STEPS = 2_000_000
+"""Fixed-step settings that would take more steps than this are left out of the ladder (a
+tenth of the run bound, budget.MAX_STEPS, which bounds every rung's run as any run's)."""
 
 SAMPLES = 10
 """Errors are the worst over this many equally spaced times (and the end), not the end alone."""
@@ -105,7 +106,7 @@ def ladder(spec, scene: Scene, program: ForceProgram) -> list[float]:
         return [0.0]
     h0 = 16.0 * default_step(scene, program, stiff=spec.stiff)
     steps = [h0 / 2**k for k in range(STEP_HALVINGS)]
-    return [h for h in steps if scene.time.duration / h <= MAX_STEPS]
+    return [h for h in steps if scene.time.duration / h <= MAX_RUNG_STEPS]
 
 
 def precision(scene: Scene, *, integrators: Sequence[str] | None = None,

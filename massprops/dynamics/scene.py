@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from massprops import tolerances
+from massprops.dynamics.budget import too_fast
 from massprops.dynamics.joints.scene import bind_scene, parse_joints, read_project
 from massprops.dynamics.model import (
     INF,
@@ -57,8 +59,8 @@ from massprops.dynamics.yamlnodes import (
 from massprops.errors import InputError, MeshFileError, SceneError, UnphysicalInertiaError
 from massprops.files import file_problem, read_input
 
-__all__ = ["FORCE_TYPES", "FRAMES", "OUTPUT_SUFFIXES", "load_scene",
-           "parse_scene"]
+__all__ = ["FORCE_TYPES", "FRAMES", "MODEL_KEYS", "ONE_BODY_KEYS", "OUTPUT_SUFFIXES",
+           "SYSTEM_KEYS", "load_scene", "parse_scene", "read_top"]
 
 
 FRAMES: tuple[str, ...] = ("world", "body")
@@ -195,26 +197,34 @@ def _with_place(exc: InputError, field: Field,
 
 
 # --- initial state, forces, time, output ---------------------------------------------------------
-def _quaternion(field: Field) -> np.ndarray:
-    """(4,) unit quaternion [w, x, y, z]; a non-unit one is normalised, a zero one refused."""
+def _quaternion(field: Field, notes: list[str] | None = None) -> np.ndarray:
+    """(4,) unit quaternion [w, x, y, z]; a zero one refused, a non-unit one normalised, and
+    said in ``notes`` (placed) where its norm misses 1 by more than QUATERNION_UNIT_RTOL."""
     q = np.array(read_vector(field, 4))
-    norm = float(np.linalg.norm(q))
-    if norm == 0:
+    largest = float(np.abs(q).max())
+    if largest == 0:
         raise field.error("expected a non-zero quaternion [w, x, y, z], got zero; "
                           "the identity is [1, 0, 0, 0]")
-    return readonly_array((q / norm).tolist())
+    unit = q / largest
+    unit = unit / float(np.linalg.norm(unit))
+    norm = largest * float(np.linalg.norm(q / largest))
+    if notes is not None and not abs(norm - 1.0) <= tolerances.QUATERNION_UNIT_RTOL:
+        shown_q = ", ".join(f"{c:.6g}" for c in unit)
+        notes.append(one_line(f"{field.where()}normalised to [{shown_q}] (its norm was "
+                              f"{norm:.6g}; a rotation's quaternion has norm 1)"))
+    return readonly_array(unit.tolist())
 
 
 _INITIAL_KEYS = ("position", "orientation", "velocity", "angular_velocity",
                  "angular_velocity_frame", "project_initial")
 
 
-def _initial(field: Field | None) -> InitialState:
+def _initial(field: Field | None, notes: list[str]) -> InitialState:
     fields = read_optional_mapping(field, _INITIAL_KEYS)
     values: dict[str, object] = {k: read_vector(fields[k]) for k in
                                  ("position", "velocity", "angular_velocity") if k in fields}
     if "orientation" in fields:
-        values["orientation"] = _quaternion(fields["orientation"])
+        values["orientation"] = _quaternion(fields["orientation"], notes)
     if "angular_velocity_frame" in fields:
         frame = read_choice(fields["angular_velocity_frame"], FRAMES, "frame")
         values["angular_velocity_frame"] = frame
@@ -318,6 +328,11 @@ def _time(field: Field, known_integrators: Sequence[str]) -> TimeSettings:
         rtol = read_number(fields["rtol"])
         if not 0 < rtol < 1:
             raise fields["rtol"].error(f"expected a number in (0, 1) such as 1.0e-9, got {rtol!r}")
+        if rtol < tolerances.RTOL_FLOOR:
+            raise fields["rtol"].error(
+                f"{rtol!r} asks for more digits than float64 has (a step is rounded to "
+                f"{tolerances.EPS / 2:.2g} relative); the smallest rtol accepted is "
+                f"{tolerances.RTOL_FLOOR:g}")
         values["rtol"] = rtol
     if "step" in fields:
         values["step"] = read_positive(fields["step"])
@@ -339,7 +354,25 @@ def _output(field: Field | None, base_dir: Path) -> OutputSettings:
 
 
 # --- the document ---------------------------------------------------------------------------------
-_TOP_KEYS = ("body", "initial", "forces", "joints", "time", "output")
+ONE_BODY_KEYS = ("body", "initial", "forces", "joints", "time", "output")
+SYSTEM_KEYS = ("bodies", "joints", "initial", "forces", "time", "output")
+MODEL_KEYS = ("model", "package_path", "xacro_args", "inertials", "base", "initial", "forces",
+              "time", "output")
+"""The top-level keys of the three kinds of scene: one body (``body:``, read here), a system
+(``bodies:``, `systems.scene`) and a robot description (``model:``, `systems.robot_scene`)."""
+
+_KINDS = {"body": ONE_BODY_KEYS, "bodies": SYSTEM_KEYS, "model": MODEL_KEYS}
+_KINDS_SAID = ("a scene has body: (one body), bodies: (a system of bodies, with joints:) or "
+               "model: (a robot description, with inertials: and base:)")
+
+
+def read_top(top: Field, kind: str, required: dict[str, str]) -> dict[str, Field]:
+    """The top level of a scene of ``kind`` (the key that says what it is: body, bodies or
+    model), read as `read_mapping` does; an unknown key's message may suggest a key of another
+    kind and says what the kinds are, so a typo'd ``bodys:`` or a ``bodies:`` next to
+    ``model:`` is told what a scene may hold, not only what this kind takes."""
+    others = tuple(k for name, keys in _KINDS.items() if name != kind for k in keys)
+    return read_mapping(top, _KINDS[kind], required, elsewhere=others, alternatives=_KINDS_SAID)
 
 
 def parse_scene(text: str, *, source: str, base_dir: Path,
@@ -360,11 +393,12 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
                          f"{_BODY_EXAMPLE} and time: {{duration: 10.0}}")
     top = Field(root, "", source)
     if not isinstance(root, yaml.MappingNode):
-        raise top.error(f"expected a mapping with keys {', '.join(_TOP_KEYS)} at the top level, "
-                        f"got {shown(root)}")
-    fields = read_mapping(top, _TOP_KEYS, {"body": _BODY_EXAMPLE, "time": "time: {duration: 10.0}"})
+        raise top.error(f"expected a mapping with keys {', '.join(ONE_BODY_KEYS)} at the top "
+                        f"level, got {shown(root)}")
+    fields = read_top(top, "body", {"body": _BODY_EXAMPLE, "time": "time: {duration: 10.0}"})
     body = _body_spec(fields["body"], base_dir)
-    initial = _initial(fields.get("initial"))
+    notes: list[str] = []
+    initial = _initial(fields.get("initial"), notes)
     forces = _forces(fields.get("forces"))
     joints, joint_fields = parse_joints(fields.get("joints"))
     if known_integrators is None:
@@ -379,11 +413,16 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
         body, warnings = _mesh_body(body)
     else:
         body_source, inputs, warnings = "explicit", (), ()
+    initial_fields = read_optional_mapping(fields.get("initial"), _INITIAL_KEYS)
+    fast = too_fast(body.mass, float(body.principal_moments[-1]), initial.velocity,
+                    initial.angular_velocity)
+    if fast is not None:
+        key, problem = fast
+        raise initial_fields[key].error(problem)  # only a given speed can be too large
     scene = Scene(body, initial, forces, time, output, source=source, body_source=body_source,
-                  input_files=inputs, warnings=warnings, joints=joints)
+                  input_files=inputs, warnings=warnings, joints=joints, notes=tuple(notes))
     if not joints:
         return scene
-    initial_fields = read_optional_mapping(fields.get("initial"), _INITIAL_KEYS)
     return bind_scene(scene, project=read_project(initial_fields),
                       given=frozenset(initial_fields), joint_fields=joint_fields,
                       initial_fields=initial_fields, initial_field=fields.get("initial"))

@@ -45,6 +45,7 @@ from massprops.dynamics.forces import (
     ForceProgram,
 )
 from massprops.dynamics.frames import Trajectory, to_world
+from massprops.dynamics.integrators.base import ignored_settings
 from massprops.dynamics.model import Scene
 from massprops.dynamics.program import compile_forces
 from massprops.dynamics.runner import RawRun, run_once, stability_hint
@@ -150,6 +151,18 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     else:
         reason = "chosen by the user"
     spec = INTEGRATORS[name]
+    ignored = ignored_settings(spec, rtol, step)
+    result = _simulate(scene, program, spec, name, reason, rtol, step, every, progress, notice,
+                       max_steps)
+    if ignored is None:
+        return result
+    return dataclasses.replace(result, notes=(f"{scene.source}: {ignored}", *result.notes))
+
+
+def _simulate(scene: Scene, program: ForceProgram, spec, name: str, reason: str,
+              rtol: float | None, step: float | None, every: float | None, progress, notice,
+              max_steps: int | None) -> SimulationResult:
+    """`simulate` once its method is known (``spec``, ``name`` and why, ``reason``)."""
     if spec.kind == "exact" and not program.exact_solvable:
         raise UsageError(f"{scene.source}: integrator exact solves only torque-free scenes with "
                          "constant forces (gravity, world-frame forces at the centre of mass) "

@@ -27,6 +27,7 @@ __all__ = [
     "one_line",
     "read_boolean",
     "read_choice",
+    "read_direction",
     "read_mapping",
     "read_matrix3",
     "read_non_negative",
@@ -128,8 +129,9 @@ def shown(node: yaml.Node) -> str:
     return node.value if len(node.value) <= 40 else node.value[:37] + "..."
 
 
-def _unknown(word: str, known: Sequence[str], what: str) -> str:
-    close = difflib.get_close_matches(word, known, n=1)
+def _unknown(word: str, known: Sequence[str], what: str,
+             candidates: Sequence[str] | None = None) -> str:
+    close = difflib.get_close_matches(word, known if candidates is None else candidates, n=1)
     hint = f"did you mean {close[0]!r}? " if close else ""
     return f"unknown {what} {word!r}; {hint}expected one of: {', '.join(known)}"
 
@@ -146,9 +148,12 @@ def is_str(node: yaml.Node) -> bool:
 
 # --- container readers --------------------------------------------------------------------------
 def read_mapping(field: Field, known: Sequence[str],
-                 required: Mapping[str, str] | None = None) -> dict[str, Field]:
+                 required: Mapping[str, str] | None = None, *, elsewhere: Sequence[str] = (),
+                 alternatives: str = "") -> dict[str, Field]:
     """Children of a mapping by key; refuses unknown and duplicate keys, and missing required ones
-    (``required`` maps each to an example shown in the message)."""
+    (``required`` maps each to an example shown in the message). An unknown key's message may
+    suggest a key of ``elsewhere`` too (keys a mapping of another kind takes at this place) and
+    ends with ``alternatives`` (what those other kinds are)."""
     node = field.node
     if not isinstance(node, yaml.MappingNode):
         raise field.error(f"expected a mapping with keys {', '.join(known)}, got {shown(node)}")
@@ -160,7 +165,10 @@ def read_mapping(field: Field, known: Sequence[str],
         key = key_node.value
         named = field.child(key_node, key)
         if key not in known:
-            raise named.error(_unknown(key, known, "key"))
+            # another kind's own key is not a typo of one: the alternatives say where it goes
+            pool = known if key in elsewhere else (*known, *elsewhere)
+            raise named.error(_unknown(key, known, "key", pool)
+                              + (f"; {alternatives}" if alternatives else ""))
         if key in out:
             raise named.error("duplicate key: YAML would silently keep only the last; keep one")
         out[key] = field.child(value_node, key)
@@ -276,6 +284,19 @@ def read_vector(field: Field, length: int = 3) -> np.ndarray:
     """(length,) float64, read-only."""
     return readonly_array([read_number(f)
                            for f in _items(field, length, f"a list of {length} numbers")])
+
+
+def read_direction(field: Field) -> np.ndarray:
+    """(3,) a unit vector along a list of 3 numbers that is not zero, read-only. Scaled by its
+    largest component before its length is taken, so that no length overflows or underflows
+    (|[1e300, 0, 0]|² is beyond float64, |[1e-170, 0, 0]|² below it): any finite non-zero
+    vector has a direction."""
+    v = np.array(read_vector(field))
+    largest = float(np.abs(v).max())
+    if largest == 0.0:
+        raise field.error("expected a non-zero direction, got a zero-length axis")
+    v = v / largest
+    return readonly_array((v / float(np.linalg.norm(v))).tolist())
 
 
 def read_matrix3(field: Field) -> np.ndarray:

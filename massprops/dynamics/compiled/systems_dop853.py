@@ -39,6 +39,7 @@ from massprops.dynamics.compiled.systems_step import (
 )
 from massprops.dynamics.compiled.unowned import by_ref
 from massprops.dynamics.integrators._dop853_tableau import BHH, ER, A, B, C, D
+from massprops.dynamics.integrators._shared import STEP_UNDERFLOW
 
 E3 = B - BHH
 SAFE, FAC_MIN, FAC_MAX = 0.8, 1.0 / 3.0, 6.0
@@ -124,7 +125,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
         last = t + 1.01 * h >= t1
         if last:
             h = t1 - t
-        if h <= 1e-14 * max(abs(t), t1):
+        if h <= STEP_UNDERFLOW * max(abs(t), t1):  # (integrate._failure says what it means)
             fail(istats, fstats, yfail, UNDERFLOW, t, y)
             return
         if istats[0] >= max_steps:

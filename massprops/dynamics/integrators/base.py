@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.errors import UsageError, setting_ref
+from massprops.tolerances import EPS, RTOL_FLOOR
 
 # --- stats : (5,) int64, accumulated (+=) by every kernel -----------------------------------------
 STEPS, NFEV, REJECTED, NJEV, STATUS = range(5)
@@ -44,6 +45,10 @@ class IntegratorSpec:
     stiff : stable far beyond the explicit step limit (~2.8 / ForceProgram.stiffest_rate).
     estimate_order : the highest order the error estimate's Richardson rule may assume (None:
         ``order``); lower where the order can fall on stiff problems (order reduction).
+    tableau : (A, b), the Butcher tableau of one step as nested tuples (A (s, s), b (s,)), whose
+        stability function R(z) = 1 + z bᵀ (I − z A)⁻¹ 1 tells what a step does to a rotation
+        (`accuracy.rotation_floor`); None for a method that is no single Runge-Kutta step (the
+        splitting methods turn exactly; the closed form takes no step).
     """
 
     name: str
@@ -53,6 +58,7 @@ class IntegratorSpec:
     run_segment: RunSegment
     stiff: bool = False
     estimate_order: int | None = None
+    tableau: tuple | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -81,9 +87,8 @@ def segment_runner(name: str, kind: str, kernel, *, scaled: bool = False) -> Run
         if not (math.isfinite(setting) and setting > 0):
             raise UsageError(f"integrator {name}: expected a {what} > 0, got {setting!r}; "
                              f"set {fix} to a positive number")
-        if kind == "adaptive" and setting < 1e-15:
-            raise UsageError(f"integrator {name}: rtol {setting!r} is below round-off "
-                             f"(2.2e-16); set {fix} to at least 1e-15")
+        if kind == "adaptive":
+            check_rtol(setting, f"integrator {name}")
         check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats)
         active, codes, params, mass, inertia = program_arrays[:5]
         if not scaled:
@@ -98,6 +103,33 @@ def segment_runner(name: str, kind: str, kernel, *, scaled: bool = False) -> Run
     run_segment.__doc__ = (f"Advance y in place from t0 to t1 with {name} ({kind}; setting = "
                            f"{what}); see massprops.dynamics.integrators for the contract.")
     return run_segment
+
+
+def check_rtol(rtol: float, who: str) -> None:
+    """UsageError (said as ``who: ...``) for an ``rtol`` below `tolerances.RTOL_FLOOR`, the
+    smallest relative tolerance float64 can deliver (one scene's key is refused the same way,
+    at its line: `dynamics.scene`)."""
+    if rtol < RTOL_FLOOR:
+        raise UsageError(f"{who}: {setting_ref('rtol')} {rtol!r} asks for more digits than "
+                         f"float64 has (a step is rounded to {EPS / 2:.2g} relative); the "
+                         f"smallest accepted is {RTOL_FLOOR:g}")
+
+
+def ignored_settings(spec: IntegratorSpec, rtol: float | None, step: float | None) -> str | None:
+    """What a run of ``spec`` does not read among the settings its caller gave (``rtol``,
+    ``step``; None: not given), said so that a setting that changes nothing is not taken for
+    one that did, or None: an adaptive method takes rtol, a fixed-step one its step, a closed
+    form neither."""
+    unread = [(name, value) for name, value, takes in (
+        ("rtol", rtol, spec.kind == "adaptive"), ("step", step, spec.kind == "fixed"))
+        if value is not None and not takes]
+    if not unread:
+        return None
+    said = " and ".join(f"{setting_ref(name)} {value:g}" for name, value in unread)
+    takes = {"adaptive": f"an adaptive method: its steps follow {setting_ref('rtol')}",
+             "fixed": f"a fixed-step method: it takes {setting_ref('step')}",
+             "exact": "a closed form: it takes no steps"}[spec.kind]
+    return f"{said} ignored: {spec.name} is {takes}"
 
 
 def check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats) -> None:

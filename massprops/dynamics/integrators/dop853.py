@@ -241,4 +241,5 @@ def _kernel(y, t0, t1, rtol, active, codes, params, mass, inertia, rot_only, t_o
 SPEC = IntegratorSpec(
     name="dop853", kind="adaptive", order=8,
     description="Dormand-Prince 8(5,3), adaptive step (time.rtol), 7th-order dense output",
-    run_segment=segment_runner("dop853", "adaptive", _kernel, scaled=True))
+    run_segment=segment_runner("dop853", "adaptive", _kernel, scaled=True),
+    tableau=(tuple(map(tuple, A[:12, :12].tolist())), tuple(B.tolist())))

@@ -259,4 +259,5 @@ SPEC = IntegratorSpec(
     name="midpoint", kind="fixed", order=2,
     description="implicit midpoint, fixed step (time.step): symplectic, keeps quadratic "
                 "invariants",
-    run_segment=segment_runner("midpoint", "fixed", _kernel, scaled=True), stiff=True)
+    run_segment=segment_runner("midpoint", "fixed", _kernel, scaled=True), stiff=True,
+    tableau=(((0.5,),), (1.0,)))

@@ -411,6 +411,7 @@ SPEC = IntegratorSpec(
     name="implicit", kind="fixed", order=5,
     description="Radau IIA order 5, fixed step (time.step), L-stable: for stiff springs/dampers",
     run_segment=segment_runner("implicit", "fixed", _kernel, scaled=True), stiff=True,
+    tableau=(tuple(map(tuple, A.tolist())), tuple(A[2].tolist())),
     # On a stiff problem the global error can fall from order 5 to the stage order 3 (order
     # reduction, Hairer & Wanner IV.15). Measured on heavy_top_damped: error ratios 20 between
     # 4h and 2h, 13 between 2h and h, so a rule that trusted the coarser ratio up to 2^5

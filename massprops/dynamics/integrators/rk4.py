@@ -119,7 +119,11 @@ def _kernel(y, t0, t1, h_req, active, codes, params, mass, inertia, rot_only, t_
     return (local * m if math.isfinite(local) else 0.0), t1
 
 
+TABLEAU = (((0.0, 0.0, 0.0, 0.0), (0.5, 0.0, 0.0, 0.0), (0.0, 0.5, 0.0, 0.0),
+            (0.0, 0.0, 1.0, 0.0)), (1 / 6, 1 / 3, 1 / 3, 1 / 6))
+"""(A, b) of the classical method, the stages `rk4_step` (and the systems kernel) take."""
+
 SPEC = IntegratorSpec(
     name="rk4", kind="fixed", order=4,
     description="classical Runge-Kutta 4, fixed step (time.step)",
-    run_segment=segment_runner("rk4", "fixed", _kernel))
+    run_segment=segment_runner("rk4", "fixed", _kernel), tableau=TABLEAU)

@@ -11,7 +11,6 @@ import dataclasses
 import math
 from collections.abc import Callable
 
-import numpy as np
 import yaml
 
 from massprops.dynamics.joints.hold import JointRefusal, consistent_initial, hold_of
@@ -21,12 +20,12 @@ from massprops.dynamics.yamlnodes import (
     Field,
     is_null,
     read_boolean,
+    read_direction,
     read_mapping,
     read_non_negative,
     read_number,
     read_type,
     read_vector,
-    readonly_array,
     shown,
 )
 from massprops.errors import SceneError
@@ -34,14 +33,6 @@ from massprops.errors import SceneError
 __all__ = ["JOINT_TYPES", "bind_scene", "parse_joints"]
 
 INITIAL_KEYS = ("position", "orientation", "velocity", "angular_velocity")
-
-
-def _nonzero(field: Field) -> np.ndarray:
-    v = read_vector(field)
-    norm = float(np.linalg.norm(v))
-    if norm == 0.0:
-        raise field.error("expected a non-zero direction, got [0, 0, 0]")
-    return readonly_array((v / norm).tolist())
 
 
 def _spherical(fields: dict[str, Field]) -> dict[str, object]:
@@ -53,9 +44,9 @@ def _spherical(fields: dict[str, Field]) -> dict[str, object]:
 
 def _revolute(fields: dict[str, Field]) -> dict[str, object]:
     out = _spherical(fields)
-    out["axis"] = _nonzero(fields["axis"])
+    out["axis"] = read_direction(fields["axis"])
     if "world_axis" in fields:
-        out["world_axis"] = _nonzero(fields["world_axis"])
+        out["world_axis"] = read_direction(fields["world_axis"])
     if "damping" in fields:
         out["damping"] = read_non_negative(fields["damping"])
     if "torque" in fields:

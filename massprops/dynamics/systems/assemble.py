@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from massprops import tolerances
 from massprops.dynamics.systems.loops import Coupling, Primitive, primitives
 from massprops.dynamics.systems.model import ONE_AXIS, WORLD, SystemScene
 from massprops.dynamics.systems.tree import NQ, NV, TreeJoint, joint_rates, quat_matrix
@@ -249,9 +250,12 @@ def _parents_first(joints: list[TreeJoint]) -> list[TreeJoint]:
 _CANNOT_MOVE = ("fixed", "distance")
 
 
-def initial_coordinates(scene: SystemScene, tree: Tree) -> tuple[np.ndarray, np.ndarray, set, set]:
+def initial_coordinates(scene: SystemScene, tree: Tree, notes: list[str] | None = None
+                        ) -> tuple[np.ndarray, np.ndarray, set, set]:
     """q0, u0 from ``initial`` (tree coordinates), and the sets of u indices the scene fixed
-    (named rates) and of q tangent indices it fixed (named positions)."""
+    (named rates) and of q tangent indices it fixed (named positions). A spherical joint's
+    quaternion is normalised, and said in ``notes`` where its norm misses 1 by more than
+    QUATERNION_UNIT_RTOL (as a scene's orientations are, `dynamics.scene`)."""
     q, u = np.zeros(tree.nq), np.zeros(tree.nv)
     fixed_q, fixed_u = set(), set()
     for j in tree.joints:
@@ -278,7 +282,13 @@ def initial_coordinates(scene: SystemScene, tree: Tree) -> tuple[np.ndarray, np.
                 if value.size != 4 or not np.linalg.norm(value) > 0:
                     raise SceneError(f"{where}expected a quaternion [w, x, y, z] for a "
                                      "spherical joint")
-                value = value / np.linalg.norm(value)
+                norm = float(np.linalg.norm(value))
+                value = value / norm
+                if notes is not None and not abs(norm - 1.0) <= \
+                        tolerances.QUATERNION_UNIT_RTOL:
+                    shown = ", ".join(f"{c:.6g}" for c in value)
+                    notes.append(f"{where}normalised to [{shown}] (its norm was {norm:.6g}; a "
+                                 "rotation's quaternion has norm 1)")
                 q[j.iq:j.iq + 4] = value * np.array([1, -1, -1, -1]) if j.reversed else value
             else:
                 if value.size != j.nq:

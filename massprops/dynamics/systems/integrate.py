@@ -18,20 +18,20 @@ kernel comes back as a status code; here it becomes the exception the run report
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 
+from massprops import tolerances
 from massprops.dynamics import budget
 from massprops.dynamics.compiled import systems_step as codes
 from massprops.dynamics.compiled.systems_fixed import DIVERGED, MAX_PIECES
 from massprops.dynamics.compiled.systems_kernel import DOP853, METHODS, run_segment
 from massprops.dynamics.compiled.systems_step import PROJECT_ITERATIONS
-from massprops.dynamics.integrators._shared import step_count
-from massprops.dynamics.systems.system import SingularPose
+from massprops.dynamics.integrators._shared import STEP_UNDERFLOW, step_count
+from massprops.dynamics.systems.system import SingularPose, spectral_radius
 from massprops.errors import RunBudgetError, setting_ref
-
-MAX_STEPS = 2_000_000
 
 NARROW_RTOL = 1e-12
 """Tolerance of the run that finds a singular pose inside the step that jumped across it: its
@@ -89,7 +89,7 @@ class Run:
 
 
 def integrate(system, y0: np.ndarray, t_out: np.ndarray, setting: float, floors: np.ndarray,
-              windows: np.ndarray, max_steps: int = MAX_STEPS, method: str = "dop853",
+              windows: np.ndarray, max_steps: int = budget.MAX_STEPS, method: str = "dop853",
               progress: Callable[[float], None] | None = None,
               watch: Callable[[int], None] | None = None) -> Run:
     """Integrate from t = 0 over [0, t_out[-1]] with ``method`` (dop853: ``setting`` is rtol;
@@ -163,7 +163,7 @@ def _segments(system, y, edges, setting, method, scales, floors, t_out, run, ist
                 fstats[4], fstats[3] = low, high
                 jumped = None if seen else _jumped(system, low, high, method)
             run.failure = jumped or _failure(system, int(istats[3]), fstats, yfail, max_steps,
-                                             method)
+                                             method, t1, edges[-1])
             return
         if short:
             run.short_err += _short_error(system, y_start, y, t0, t1, h, method, within,
@@ -251,9 +251,33 @@ def _fewer(method: str) -> str:
             else f"lengthen {setting_ref('step')}")
 
 
+def _rate_at(system, y: np.ndarray, t: float) -> float:
+    """1/s: the fastest rate of the system at (t, y) (`system.spectral_radius`), inf where
+    it cannot be had (a state so wild that the solve fails: as good as stiff)."""
+    try:
+        with np.errstate(all="ignore"):  # a wild state's rate overflows: inf
+            rate = spectral_radius(system, y, t)
+    except (ArithmeticError, np.linalg.LinAlgError):
+        return math.inf
+    return rate if math.isfinite(rate) else math.inf
+
+
+def _outgrown(duration: float, rate: float, max_steps: int) -> str:
+    """How a run of ``duration`` s whose fastest rate is ``rate`` (1/s) outgrows float64's
+    time resolution and the run bound."""
+    follow = duration * rate  # steps of 1 / rate: what following the fastest rate takes
+    following = (f"following the fastest rate, {rate:.3g}/s, takes ~{follow:.2g} steps; "
+                 if follow >= 1.0 else "")
+    return (f"over {duration:.6g} s the run asks for more than float64 and the run bound give "
+            f"(at t = {duration:.6g} s float64 resolves time to t·eps = "
+            f"{duration * tolerances.EPS:.3g} s; {following}the bound is {max_steps:.3g} steps, "
+            f"{setting_ref('max_steps')}); shorten {setting_ref('time.duration')}")
+
+
 def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: int,
-             method: str) -> BaseException:
-    """The exception of a kernel's failure ``status`` at fstats[3] (see systems_dop853)."""
+             method: str, t1: float = math.inf, duration: float = math.inf) -> BaseException:
+    """The exception of a kernel's failure ``status`` at fstats[3] (see systems_dop853), in a
+    segment ending at ``t1`` of a run of ``duration`` (s)."""
     t, source = float(fstats[3]), system.scene.source
     fewer = _fewer(method)
     wild = (f"{source}: the {method} run diverged at t = {t:.6g} s: "
@@ -262,11 +286,24 @@ def _failure(system, status: int, fstats: np.ndarray, y: np.ndarray, max_steps: 
                "its step is beyond the method's stability there; "
                + (f"shorten {setting_ref('step')} or " if method != "dop853" else "")
                + f"run the implicit method ({setting_ref('integrator')})"))
+    if status == codes.UNDERFLOW and method != "dop853":  # Newton failed in MAX_PIECES pieces
+        rate = _rate_at(system, y, t)  # a step that resolves it, 1/ρ, may not fit the bound
+        fits = not duration * rate > max_steps or not math.isfinite(rate)
+        return ArithmeticError(f"{source}: {method}'s Newton iterations failed at "
+                               f"t = {t:.6g} s even in {MAX_PIECES} pieces of the step; "
+                               f"shorten {setting_ref('step')}"
+                               + ("" if fits else f"; but {_outgrown(duration, rate, max_steps)}"))
     if status == codes.UNDERFLOW:
-        if method != "dop853":  # the fixed-step kernels' Newton failed in MAX_PIECES pieces
-            return ArithmeticError(f"{source}: {method}'s Newton iterations failed at "
-                                   f"t = {t:.6g} s even in {MAX_PIECES} pieces of the step; "
-                                   f"shorten {setting_ref('step')}")
+        floor = STEP_UNDERFLOW * max(abs(t), t1)  # the kernel's rule (systems_dop853.segment)
+        rate = _rate_at(system, y, t)
+        if rate * floor < 1.0:  # a step of 1/ρ resolves the fastest rate: not stiffness
+            allows = (f"its fastest rate, {rate:.3g}/s, allows steps of ~{1.0 / rate:.3g} s"
+                      if rate > 0 else "it has no rate of its own there")
+            return RunBudgetError(f"{source}: dop853's step fell below {floor:.3g} s "
+                                  f"({STEP_UNDERFLOW:g} of {max(abs(t), t1):.6g} s) at "
+                                  f"t = {t:.6g} s where the system is not stiff ({allows}): "
+                                  + _outgrown(duration, rate, max_steps)
+                                  + f" or loosen {setting_ref('rtol')}")
         return ArithmeticError(f"{source}: dop853's step fell to round-off at t = {t:.6g} s "
                                "(every trial step failed or was rejected): the system is "
                                "too stiff or singular there for an explicit method; run the "

@@ -13,9 +13,16 @@ import math
 
 import numpy as np
 
-from massprops.dynamics.accuracy import companion_settings, global_estimate
+from massprops.dynamics.accuracy import (
+    RESOLVES_NOTHING,
+    companion_settings,
+    global_estimate,
+    rotation_floor,
+)
 from massprops.dynamics.budget import STEP_BUDGET
+from massprops.dynamics.integrators.base import check_rtol
 from massprops.dynamics.systems.integrate import integrate
+from massprops.dynamics.systems.model import WORLD
 from massprops.dynamics.systems.outputs import Samples, distance, evaluate_states
 from massprops.dynamics.systems.stiffness import fastest_rate, unresolved_mode_error
 from massprops.dynamics.systems.system import System
@@ -55,8 +62,9 @@ def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
                                             f"~{explicit:.2g} explicit steps "
                                             f"(> {STEP_BUDGET:.0e})")
     if name == "dop853":
-        return name, float(rtol if rtol is not None else scene.time.rtol), \
-            reason or REASONS[name]
+        value = float(rtol if rtol is not None else scene.time.rtol)
+        check_rtol(value, scene.source)  # a scene's own is refused at its line already
+        return name, value, reason or REASONS[name]
     h = step if step is not None else scene.time.step
     if h is None:
         h = default_step(system, y0, scene.time.duration, stiff=is_stiff(name))
@@ -175,11 +183,17 @@ def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
     ``progress(fraction)`` moved meanwhile, from ½ to 1; ``short_err``: the main run's error on
     its segments of one or two steps, which the companions cannot see (`integrate.Run`), added
     in the metric's units as one body's is: its component unknown, divided by the smallest
-    scale (an angle's error of a quaternion component δ is about 2δ)."""
+    scale (an angle's error of a quaternion component δ is about 2δ). Never below what the
+    method does to the rotations its steps take (`accuracy.rotation_floor`, `turn_per_step`):
+    where those steps resolve nothing, the estimate is RESOLVES_NOTHING whatever the companions
+    say (they can agree by chance there) or whether they ran."""
     # deferred: the registry imports the one-body kernels' modules (their orders only here)
     from massprops.dynamics.integrators import INTEGRATORS
 
     spec, size = INTEGRATORS[name], system.scene.size
+    floor = rotation_floor(spec.tableau, turn_per_step(system, samples, steps), steps)
+    if floor >= RESOLVES_NOTHING:
+        return floor
     if side is None:
         side = start_companions(system, y0, t_out, name, setting, floors, windows, limit // 2)
     if side is None:
@@ -206,7 +220,26 @@ def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
         if not math.isfinite(probe):  # the resolving run could not be made: size unknown
             return None
         estimate = max(estimate, probe)
-    return estimate if math.isfinite(estimate) else None
+    return max(estimate, floor) if math.isfinite(estimate) else None
+
+
+def turn_per_step(system: System, samples: Samples, steps: int) -> float:
+    """rad: the largest turn per step, on average over a run of ``steps`` steps sampled at
+    ``samples``, of a rotation the steps integrate as a quaternion: a ball or free joint's
+    (its second body's angular velocity relative to its first's, ∫ |ω_rel| dt by the
+    trapezoid rule over the samples, / ``steps``). A hinge's or a slider's coordinate is an
+    angle or a length, which every method steps as a number (a hinge turning at a constant
+    rate is integrated exactly); what its rate does to the dynamics the companions see."""
+    w, worst = samples.angular_velocity, 0.0
+    with np.errstate(over="ignore", invalid="ignore"):  # a run-away run's: inf, said as such
+        for j in system.tree.joints:
+            if j.kind not in ("spherical", "free"):
+                continue
+            rel = w[:, j.child] - (0.0 if j.parent == WORLD else w[:, j.parent])
+            speed = np.linalg.norm(rel, axis=1)
+            turned = float(np.sum(0.5 * (speed[1:] + speed[:-1]) * np.diff(samples.t)))
+            worst = max(worst, turned / max(steps, 1))
+    return worst
 
 
 def default_step(system: System, y0: np.ndarray, duration: float, *, stiff: bool) -> float:

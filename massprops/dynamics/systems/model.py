@@ -150,6 +150,7 @@ class SystemScene:
     couplings: tuple[JointCoupling, ...] = ()  # a description's mimic/equality relations
     drags: tuple[BodyDrag, ...] = ()
     length: float | None = None  # the size a scene fixes (one body's: the contract's metric)
+    notes: tuple[str, ...] = ()  # what the scene's own checks said, placed (file:line: key: )
 
     @property
     def size(self) -> float:

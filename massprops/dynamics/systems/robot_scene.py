@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from massprops.dynamics.model import OutputSettings, TimeSettings
-from massprops.dynamics.scene import _output, _with_place, scene_text
+from massprops.dynamics.scene import _output, _with_place, read_top, scene_text
 from massprops.dynamics.systems.description import (
     BASES,
     INERTIALS,
@@ -49,7 +49,6 @@ from massprops.dynamics.yamlnodes import (
     Field,
     compose,
     read_choice,
-    read_mapping,
     read_string,
     read_strings,
 )
@@ -62,8 +61,6 @@ __all__ = ["DESCRIPTION_SUFFIXES", "check_description_settings", "description_sc
 
 DESCRIPTION_SUFFIXES = (".urdf", ".sdf", ".xml", ".xacro")
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
-_KEYS = ("model", "package_path", "xacro_args", "inertials", "base", "initial", "forces", "time",
-         "output")
 _SCENE_KEYS = {"package_path": "the scene key package_path:",
                "xacro_arg": "an entry of the scene key xacro_args:"}
 """How a `model:` scene says the settings a description's messages name (`setting_ref`)."""
@@ -123,8 +120,8 @@ def load_any_system(path: str | os.PathLike, duration: float | None = None, *,
 def parse_model_scene(text: str, *, source: str, base_dir: Path) -> SystemScene:
     """A scene with ``model:`` (see the module doc). Raises SceneError, RobotModelError."""
     root = compose(text, source)
-    fields = read_mapping(Field(root, "", source), _KEYS,
-                          {"model": "model: arm.urdf", "time": "time: {duration: 2.0}"})
+    fields = read_top(Field(root, "", source), "model",
+                      {"model": "model: arm.urdf", "time": "time: {duration: 2.0}"})
     file = base_dir / read_string(fields["model"], "a URDF, SDF or MJCF file name")
     problem = file_problem(file)
     if problem is not None:

@@ -14,12 +14,19 @@ import numpy as np
 
 from massprops import tolerances
 from massprops.dynamics.accuracy import estimate_note
-from massprops.dynamics.budget import ENERGY_BLOWUP, sample_times
+from massprops.dynamics.budget import (
+    ENERGY_BLOWUP,
+    MAX_STEPS,
+    check_fixed_steps,
+    sample_times,
+    too_fast,
+)
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
+from massprops.dynamics.integrators.base import ignored_settings
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
 from massprops.dynamics.systems.falling import falling_frame
-from massprops.dynamics.systems.integrate import MAX_STEPS, integrate
+from massprops.dynamics.systems.integrate import integrate
 from massprops.dynamics.systems.methods import (
     REASONS,
     SYSTEM_INTEGRATORS,
@@ -30,7 +37,8 @@ from massprops.dynamics.systems.methods import (
 )
 from massprops.dynamics.systems.model import SystemScene
 from massprops.dynamics.systems.outputs import Samples, energies, evaluate, reference
-from massprops.dynamics.systems.system import System
+from massprops.dynamics.systems.system import System, UnclosedLoop
+from massprops.dynamics.systems.tree import kinematics
 from massprops.errors import (
     ComputationError,
     DivergenceError,
@@ -94,9 +102,10 @@ def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
     scene, origin = localized(scene)  # about the assembly's middle, wherever it sits
     tree = build_tree(scene)
     system = System(scene, tree, origin)
-    q, u, fixed_q, fixed_u = initial_coordinates(scene, tree)
-    y0 = np.concatenate([q, u])
     notes: list[str] = []
+    q, u, fixed_q, fixed_u = initial_coordinates(scene, tree, notes)
+    _check_speeds(scene, tree, q, u)
+    y0 = np.concatenate([q, u])
     if system.m:
         pos, vel = system.residual(y0)
         speed = max(float(np.abs(u).max(initial=0.0)) * tree.size, tree.size
@@ -113,11 +122,13 @@ def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
                              f"by {amount}); set initial.project_initial: true to keep the named "
                              "coordinates and rates and solve the others")
         before = y0
-        y0, _, _ = system.project(y0, (fixed_q, fixed_u), iterations=50)
-        if system.residual(y0)[0] > 1e3 * tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS \
-                * tree.size:
-            raise SceneError(f"{scene.where('initial')}the named initial coordinates cannot "
-                             "be met by the loop's other joints; change them")
+        try:
+            y0, _, _ = system.project(y0, (fixed_q, fixed_u), iterations=50)
+        except UnclosedLoop as exc:
+            raise _unclosed(scene, exc.residual) from exc
+        left = system.residual(y0)[0]
+        if left > 1e3 * tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size:
+            raise _unclosed(scene, left)
         moved = float(np.abs(y0 - before).max())
         if scene.initial.project and moved > 0:
             notes.append(f"{scene.where('initial')}projected onto the joints: coordinates and "
@@ -129,6 +140,46 @@ def prepare(scene: SystemScene) -> tuple[System, np.ndarray, list[str]]:
         y0 = frame.start(y0, tree.nq)
     system.rank = sol.rank
     return system, y0, notes
+
+
+def _unclosed(scene: SystemScene, residual: float) -> SceneError:
+    """The refusal of a start whose named coordinates (initial.positions, kept by the
+    projection) leave the loop open by ``residual`` (m, the largest |Φ| the projection left),
+    at the first named one's line."""
+    named = [k for k in scene.places if k.startswith("initial.positions.")]
+    place = scene.where(named[0]) if named else scene.where("initial")
+    given = ", ".join(f"{k} = {', '.join(f'{x:g}' for x in v)}"
+                      for k, v in scene.initial.positions.items())
+    what = f"the named initial coordinates ({given})" if given else "the assembly pose"
+    return SceneError(f"{place}the loop cannot be closed with {what}: the other joints, solved "
+                      f"for the closest fit, leave it open by {residual:.3g} m; change them")
+
+
+def _check_speeds(scene: SystemScene, tree, q: np.ndarray, u: np.ndarray) -> None:
+    """SceneError where a body starts faster than a run can square (`budget.too_fast`), at
+    the initial key that gave its speed (its initial.bodies entry, else the first named
+    rate)."""
+    with np.errstate(all="ignore"):  # a start that overflows here is refused below
+        kin = kinematics(tree, q, u)
+        omega = kin.V[:, 0:3]
+        velocity = kin.V[:, 3:6] + np.cross(omega, kin.com)  # of each centre of mass
+    for i, body in enumerate(tree.bodies):
+        fast = too_fast(body.mass, float(np.linalg.eigvalsh(body.inertia).max()),
+                        velocity[i], omega[i])
+        if fast is None:
+            continue
+        rates = [k for k in scene.places if k.startswith("initial.rates.")]
+        key = (f"initial.bodies.{body.name}" if body.name in scene.initial.velocities
+               else rates[0] if rates else "initial")
+        raise SceneError(f"{scene.where(key)}body {body.name!r}: {fast[1]}")
+
+
+def _spec(name: str):
+    """The registry's record of method ``name``."""
+    # deferred: the registry imports the one-body kernels' modules (the record only here)
+    from massprops.dynamics.integrators import INTEGRATORS
+
+    return INTEGRATORS[name]
 
 
 def _floors(system: System, duration: float) -> np.ndarray:
@@ -161,7 +212,8 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     """Run ``scene`` with ``integrator`` (SYSTEM_INTEGRATORS; default the scene's) at ``rtol``
     (dop853) or ``step`` (s, the fixed-step ones; default the scene's, else `default_step`);
     ComputationError (exit 3) at a singular pose or a failed step,
-    RunBudgetError once a run takes ``max_steps`` steps (default: integrate.MAX_STEPS).
+    RunBudgetError once a run takes ``max_steps`` steps (default: budget.MAX_STEPS), or up
+    front for a fixed step that would take more.
     ``notice(text)``: told once if the step loop's kernel has to be compiled (see
     `compiled.compiling.prepare`). ``progress(fraction)`` is called between the run's compiled
     calls. Ctrl-C there propagates, or with ``interruptible`` returns the samples computed so
@@ -179,11 +231,16 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     # evaluates the compiled right-hand side)
     prepare_kernels([SYSTEMS], notice)
     name, setting, reason = choose(system, y0, name, rtol, step)
+    limit = max_steps or MAX_STEPS
+    if kind_of(name) == "fixed":  # the run bound, before the run: its step count is known
+        check_fixed_steps(name, duration, setting, len(_windows(scene)), scene.source, limit)
+    ignored = ignored_settings(_spec(name), rtol, step)
+    if ignored is not None:
+        notes.append(f"{scene.source}: {ignored}")
     t_out = sample_times(duration, every if every is not None else scene.output.every,
                          scene.source)
     floors = _floors(system, duration)
     start = time.perf_counter()
-    limit = max_steps or MAX_STEPS
     side = start_companions(system, y0, t_out, name, setting, floors, _windows(scene),
                             limit) if estimate else None
     try:  # the companions stop with the run, whatever ends it (a finished one: at once)

@@ -10,12 +10,14 @@ here in ``SystemScene.places``.
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from pathlib import Path
 
 import numpy as np
 import yaml
 
+from massprops import tolerances
 from massprops.dynamics.model import RigidBody, TimeSettings
 from massprops.dynamics.scene import (
     TIME_KEYS,
@@ -27,6 +29,7 @@ from massprops.dynamics.scene import (
     _quaternion,
     _time,
     _window,
+    read_top,
     scene_text,
 )
 from massprops.dynamics.systems.model import (
@@ -47,6 +50,7 @@ from massprops.dynamics.yamlnodes import (
     is_str,
     read_boolean,
     read_choice,
+    read_direction,
     read_mapping,
     read_non_negative,
     read_number,
@@ -62,7 +66,6 @@ from massprops.rotation import quat_to_matrix
 
 __all__ = ["is_system_text", "load_system", "parse_system"]
 
-_TOP_KEYS = ("bodies", "joints", "initial", "forces", "time", "output")
 _PLACEMENT = ("position", "orientation")
 _JOINT_KEYS = {
     "spherical": ("point",), "revolute": ("point", "axis"), "prismatic": ("point", "axis"),
@@ -90,10 +93,11 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
     if root is None:
         raise SceneError(f"{source}:1: the file is empty")
     top = Field(root, "", source)
-    fields = read_mapping(top, _TOP_KEYS, {"bodies": "bodies: {crank: {mass: 1, ...}}",
-                                           "time": "time: {duration: 10.0}"})
+    fields = read_top(top, "bodies", {"bodies": "bodies: {crank: {mass: 1, ...}}",
+                                      "time": "time: {duration: 10.0}"})
     places: dict[str, str] = {}
-    specs, names = _bodies(fields["bodies"], base_dir, places)
+    notes: list[str] = []
+    specs, names = _bodies(fields["bodies"], base_dir, places, notes)
     index = {name: i for i, name in enumerate(names)}
     joints = _joints(fields.get("joints"), index, places)
     gravity, forces, springs, drags = _forces(fields.get("forces"), index)
@@ -112,7 +116,7 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
     joints = tuple(_fixed_point(j, bodies) for j in joints)
     return SystemScene(tuple(bodies), joints, gravity, forces, springs, initial, time, output,
                        source=source, input_files=tuple(inputs), warnings=tuple(warnings),
-                       places=places, drags=drags)
+                       places=places, drags=drags, notes=tuple(notes))
 
 
 def system_time(field: Field) -> TimeSettings:
@@ -142,9 +146,12 @@ def _fixed_point(joint: SystemJoint, bodies: list) -> SystemJoint:
 
 
 # --- bodies -------------------------------------------------------------------------------------
-def _bodies(field: Field, base_dir: Path, places: dict):
-    if not isinstance(field.node, yaml.MappingNode) or not field.node.value:
+def _bodies(field: Field, base_dir: Path, places: dict, notes: list[str]):
+    if not isinstance(field.node, yaml.MappingNode):
         raise field.error(f"expected a mapping name -> body, got {shown(field.node)}")
+    if not field.node.value:
+        raise field.error("the mapping is empty: a system needs at least one body, e.g. "
+                          "bodies: {crank: {mass: 1.0, inertia: [[...]], position: [0, 0, 0]}}")
     specs, names = [], []
     for key_node, value_node in field.node.value:
         name = key_node.value if is_str(key_node) else None
@@ -169,7 +176,7 @@ def _bodies(field: Field, base_dir: Path, places: dict):
         if "position" in placed:
             placement["position"] = read_vector(placed["position"])
         if "orientation" in placed:
-            placement["orientation"] = _quaternion(placed["orientation"])
+            placement["orientation"] = _quaternion(placed["orientation"], notes)
         places[f"bodies.{name}"] = item.where()
         specs.append((spec, placement))
         names.append(name)
@@ -209,12 +216,27 @@ def _pair(field: Field, index: dict) -> tuple[int, int]:
     return a, b
 
 
-def _unit(field: Field) -> np.ndarray:
-    v = np.array(read_vector(field))
-    norm = float(np.linalg.norm(v))
-    if norm == 0.0:
-        raise field.error("expected a non-zero direction, got a zero-length axis")
-    return v / norm
+def _two_axes(field: Field) -> np.ndarray:
+    """(2, 3) a universal joint's two unit axes, which must not be parallel: its two turns
+    would then be one, and its motion subspace [a0, a1] (the columns of S, whose singular values
+    are √(1 ± cos α), α the angle between the axes) would lose a rank for good (turning about
+    a0 keeps a1's angle to it). Refused like a singular pose: where σ_min / σ_max = tan(α' / 2),
+    α' the acute angle between the axis lines, is within NEAR_SINGULAR_MARGIN (α' ≤ 2e-6 rad),
+    the run's own test of a mechanism at rank loss; nearer than that the joint's mass matrix
+    (condition ~1 / tan²) is not positive definite in float64."""
+    if not (isinstance(field.node, yaml.SequenceNode) and len(field.node.value) == 2):
+        raise field.error("expected two axes [[...], [...]]")
+    axes = np.array([np.array(read_direction(field.child(n, k)))
+                     for k, n in enumerate(field.node.value)])
+    cos = min(abs(float(axes[0] @ axes[1])), 1.0)
+    half_turn = float(np.linalg.norm(np.cross(axes[0], axes[1]))) / (1.0 + cos)  # tan(α'/2)
+    if not half_turn > tolerances.NEAR_SINGULAR_MARGIN:
+        angle = 2.0 * math.atan(half_turn)
+        raise field.error(f"the two axes are parallel ({angle:.3g} rad apart as lines): a "
+                          "universal joint turns about two different directions, at least "
+                          f"{2.0 * math.atan(tolerances.NEAR_SINGULAR_MARGIN):.1g} rad apart "
+                          "(typically perpendicular); for one axis use a revolute joint")
+    return axes
 
 
 def _joints(field: Field | None, index: dict, places: dict) -> tuple[SystemJoint, ...]:
@@ -241,13 +263,9 @@ def _joints(field: Field | None, index: dict, places: dict) -> tuple[SystemJoint
         values: dict = {"point": read_vector(fields["point"]) if "point" in fields else None,
                         "axes": np.zeros((0, 3))}
         if "axis" in fields:
-            values["axes"] = _unit(fields["axis"])[None, :]
+            values["axes"] = np.array(read_direction(fields["axis"]))[None, :]
         if "axes" in fields:
-            axes = fields["axes"]
-            if not (isinstance(axes.node, yaml.SequenceNode) and len(axes.node.value) == 2):
-                raise axes.error("expected two axes [[...], [...]]")
-            values["axes"] = np.array([_unit(axes.child(n, k))
-                                       for k, n in enumerate(axes.node.value)])
+            values["axes"] = _two_axes(fields["axes"])
         if "points" in fields:
             pts = fields["points"]
             if not (isinstance(pts.node, yaml.SequenceNode) and len(pts.node.value) == 2):

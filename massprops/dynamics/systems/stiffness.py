@@ -31,9 +31,9 @@ import math
 
 import numpy as np
 
-from massprops import tolerances
 from massprops.dynamics.systems.integrate import integrate
 from massprops.dynamics.systems.outputs import Samples, distance, evaluate_states
+from massprops.dynamics.systems.system import spectral_radius
 
 PROBE_STEPS = 16
 """Steps of the method inside the window: Radau's |R(hρ)| <= 0.6 for h·ρ > 1 leaves < 3e-4."""
@@ -60,28 +60,8 @@ def fastest_rate(system, y0: np.ndarray) -> float:
     step: the numpy model's took 28 ms each on dm_control's 85-dof dog, 5 s of its run), kept
     on ``system`` (a `System`). The caller has the systems kernel ready
     (`compiling.prepare`), as a run needs it anyway."""
-    if getattr(system, "fastest_rate", None) is not None:
-        return system.fastest_rate
-    # deferred: numba's kernels, only for this estimate
-    from massprops.dynamics.compiled.systems_step import OK, rhs, workspace
-    from massprops.dynamics.systems.tree import qdot
-
-    ws = workspace(system.program)
-
-    def f(y: np.ndarray) -> np.ndarray:
-        out = np.empty_like(y)
-        if rhs(system.program, ws, 0.0, y, out, -1) == OK:
-            return out
-        udot = system.solve(0.0, y, check=False, full=False).udot  # says what went wrong
-        return np.concatenate([qdot(system.tree, y[:system.nq], y[system.nq:]), udot])
-
-    f0, n = f(y0), y0.size
-    jac = np.empty((n, n))
-    for j in range(n):
-        y = y0.copy()
-        y[j] += math.sqrt(tolerances.EPS) * max(1.0, abs(y0[j]))
-        jac[:, j] = (f(y) - f0) / (y[j] - y0[j])
-    system.fastest_rate = float(np.abs(np.linalg.eigvals(jac)).max(initial=0.0))
+    if getattr(system, "fastest_rate", None) is None:
+        system.fastest_rate = spectral_radius(system, y0)
     return system.fastest_rate
 
 

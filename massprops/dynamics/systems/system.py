@@ -10,6 +10,7 @@ correction in the kinetic-energy metric), Newton until Φ is at round-off; the s
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,6 +31,14 @@ EPS = tolerances.EPS
 
 class SingularPose(ComputationError):
     """The constraint Jacobian lost rank during the run (a dead point) or the projection failed."""
+
+
+class UnclosedLoop(SingularPose):
+    """The projection could not close the loops: ``residual`` (m), the largest |Φ| it left."""
+
+    def __init__(self, message: str, residual: float) -> None:
+        super().__init__(message)
+        self.residual = residual
 
 
 @dataclass(frozen=True, eq=False)
@@ -211,10 +220,11 @@ class System:
         else:
             phi, g, chol = self.constraint(y)
             if np.abs(phi).max() > 1e3 * atol:
-                raise SingularPose(f"{self.scene.source}: the joints cannot be closed at "
-                                   f"t = {self.time:.6g} s (position residual "
-                                   f"{np.abs(phi).max():.3g} m after {iterations} Newton "
-                                   "steps): the loop cannot be assembled there")
+                left = float(np.abs(phi).max())
+                raise UnclosedLoop(f"{self.scene.source}: the joints cannot be closed at "
+                                   f"t = {self.time:.6g} s (position residual {left:.3g} m "
+                                   f"after {iterations} Newton steps): the loop cannot be "
+                                   "assembled there", left)
         phi, g, chol = self.constraint(y)
         u = y[self.nq:]
         du = -_min_norm(g, chol, g @ u, fixed[1])
@@ -328,3 +338,27 @@ def _min_norm(g: np.ndarray, chol: MassFactor, residual: np.ndarray,
     out[free] = np.linalg.solve(cf.T, z)
     return out
 
+
+def spectral_radius(system, y: np.ndarray, t: float = 0.0) -> float:
+    """ρ(∂ẏ/∂y) at (t, y), 1/s: the spectral radius of the right-hand side's Jacobian by forward
+    differences (n + 1 evaluations of the compiled right-hand side, the one the runs step),
+    `stiffness.fastest_rate` at the start; the caller has the systems kernel ready."""
+    # deferred: numba's kernels, only where a rate is asked for (auto, an estimate, a failure)
+    from massprops.dynamics.compiled.systems_step import OK, rhs, workspace
+
+    ws = workspace(system.program)
+
+    def f(y: np.ndarray) -> np.ndarray:
+        out = np.empty_like(y)
+        if rhs(system.program, ws, t, y, out, -1) == OK:
+            return out
+        udot = system.solve(t, y, check=False, full=False).udot  # says what went wrong
+        return np.concatenate([tr.qdot(system.tree, y[:system.nq], y[system.nq:]), udot])
+
+    f0, n = f(y), y.size
+    jac = np.empty((n, n))
+    for j in range(n):
+        moved = y.copy()
+        moved[j] += math.sqrt(tolerances.EPS) * max(1.0, abs(y[j]))
+        jac[:, j] = (f(moved) - f0) / (moved[j] - y[j])
+    return float(np.abs(np.linalg.eigvals(jac)).max(initial=0.0))
