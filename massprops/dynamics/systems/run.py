@@ -23,7 +23,7 @@ from massprops.dynamics.budget import (
 )
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
-from massprops.dynamics.integrators.base import ignored_settings
+from massprops.dynamics.integrators.base import check_rtol, ignored_settings
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
 from massprops.dynamics.systems.falling import falling_frame
 from massprops.dynamics.systems.integrate import integrate
@@ -237,6 +237,8 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     given = step if step is not None else scene.time.step
     if name != "auto" and kind_of(name) == "fixed" and given is not None:
         _check_steps(scene, name, given, limit)  # before a kernel is compiled or loaded
+    if name == "dop853":  # the same (`methods.choose` checks what auto picks)
+        check_rtol(float(rtol if rtol is not None else scene.time.rtol), scene.source)
     # compiled or loaded before the timed run (and before `choose`, whose stiffness probe
     # evaluates the compiled right-hand side)
     prepare_kernels([SYSTEMS], notice)
