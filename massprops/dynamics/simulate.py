@@ -45,7 +45,7 @@ from massprops.dynamics.forces import (
     ForceProgram,
 )
 from massprops.dynamics.frames import Trajectory, to_world
-from massprops.dynamics.integrators.base import ignored_settings
+from massprops.dynamics.integrators.base import check_rtol, ignored_settings
 from massprops.dynamics.model import Scene
 from massprops.dynamics.program import compile_forces
 from massprops.dynamics.runner import RawRun, run_once, stability_hint
@@ -387,7 +387,8 @@ def _error_estimate(scene, program, spec, setting, traj, others: list[RawRun] | 
 
 def _setting(spec, scene: Scene, program: ForceProgram, rtol: float | None,
              step: float | None) -> float:
-    if spec.kind == "adaptive":
+    if spec.kind == "adaptive":  # refused before a kernel is compiled or loaded
+        check_rtol(float(rtol if rtol is not None else scene.time.rtol), str(scene.source))
         return float(rtol if rtol is not None else scene.time.rtol)
     if spec.kind == "fixed":
         h = step if step is not None else scene.time.step

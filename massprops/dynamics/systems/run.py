@@ -23,7 +23,7 @@ from massprops.dynamics.budget import (
 )
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
-from massprops.dynamics.integrators.base import ignored_settings
+from massprops.dynamics.integrators.base import check_rtol, ignored_settings
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
 from massprops.dynamics.systems.falling import falling_frame
 from massprops.dynamics.systems.integrate import integrate
@@ -174,6 +174,12 @@ def _check_speeds(scene: SystemScene, tree, q: np.ndarray, u: np.ndarray) -> Non
         raise SceneError(f"{scene.where(key)}body {body.name!r}: {fast[1]}")
 
 
+def _check_steps(scene: SystemScene, name: str, step: float, limit: int) -> None:
+    """RunBudgetError (`budget.check_fixed_steps`) where ``name`` at ``step`` (s) would take
+    more than ``limit`` steps over the scene's duration, window edges included."""
+    check_fixed_steps(name, scene.time.duration, step, len(_windows(scene)), scene.source, limit)
+
+
 def _spec(name: str):
     """The registry's record of method ``name``."""
     # deferred: the registry imports the one-body kernels' modules (the record only here)
@@ -227,13 +233,18 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     duration = scene.time.duration
     if duration == 0:  # the start pose only (a description's static torques)
         return _static(system, y0, notes)
+    limit = max_steps or MAX_STEPS
+    given = step if step is not None else scene.time.step
+    if name != "auto" and kind_of(name) == "fixed" and given is not None:
+        _check_steps(scene, name, given, limit)  # before a kernel is compiled or loaded
+    if name == "dop853":  # the same (`methods.choose` checks what auto picks)
+        check_rtol(float(rtol if rtol is not None else scene.time.rtol), scene.source)
     # compiled or loaded before the timed run (and before `choose`, whose stiffness probe
     # evaluates the compiled right-hand side)
     prepare_kernels([SYSTEMS], notice)
     name, setting, reason = choose(system, y0, name, rtol, step)
-    limit = max_steps or MAX_STEPS
-    if kind_of(name) == "fixed":  # the run bound, before the run: its step count is known
-        check_fixed_steps(name, duration, setting, len(_windows(scene)), scene.source, limit)
+    if kind_of(name) == "fixed":  # a default step too: the run bound, before the run
+        _check_steps(scene, name, setting, limit)
     ignored = ignored_settings(_spec(name), rtol, step)
     if ignored is not None:
         notes.append(f"{scene.source}: {ignored}")
