@@ -5,6 +5,7 @@ round-off), honest error estimates, a stiff joint spring, and the refusals."""
 from __future__ import annotations
 
 import math
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -517,3 +518,44 @@ def test_a_load_window_shorter_than_the_step_is_in_the_estimate(method):
         run = simulate_system(scene, integrator=method, step=h)
         error = distance(run.samples, ref.samples, scene.size)
         assert error <= run.diagnostics["error_estimate"], (h, error)
+
+
+# --- the companions beside the main run ----------------------------------------------------------
+class _AfterTheMainRun:
+    """Stands for `methods.Companions` and starts the real ones only when the run asks for their
+    result, i.e. once the main run is done: the sequential order, the truth the concurrent one
+    must give."""
+
+    fraction = 0.0
+
+    def __init__(self, start, args) -> None:
+        self._start, self._args, self._real = start, args, None
+
+    def stop(self) -> None:
+        if self._real is not None:
+            self._real.stop()
+
+    def result(self, steps, poll):
+        self._real = self._start(*self._args)
+        return self._real.result(steps, poll)
+
+
+@pytest.mark.parametrize("integrator, step", [("dop853", None), ("rk4", 0.01),
+                                              ("implicit", 0.01)])
+def test_companions_beside_the_main_run_give_the_sequential_numbers_and_no_thread_stays(
+        integrator, step, monkeypatch):
+    from massprops.dynamics.systems import run as run_module
+
+    scene = with_time(load_system(SAMPLES / "double_pendulum.yaml"), duration=2.0)
+    threads = threading.active_count()
+    beside = simulate_system(scene, integrator=integrator, step=step)
+    assert threading.active_count() == threads  # the helper thread has ended with the run
+    real, made = run_module.start_companions, []
+    monkeypatch.setattr(run_module, "start_companions",
+                        lambda *args: made.append(_AfterTheMainRun(real, args)) or made[-1])
+    after = simulate_system(scene, integrator=integrator, step=step)
+    assert threading.active_count() == threads
+    assert len(made) == 1 and made[0]._real is not None  # they did run, after the main run
+    estimate = beside.diagnostics["error_estimate"]
+    assert estimate is not None and estimate == after.diagnostics["error_estimate"]
+    assert np.array_equal(beside.samples.position, after.samples.position)
