@@ -22,6 +22,8 @@ from collections.abc import Iterator
 from types import SimpleNamespace
 from typing import Any
 
+from massprops.cad.occ import face_edges
+
 __all__ = ["ANALYTIC_FACES", "basis_faces", "face_census", "fixed_rule_exact",
            "is_analytic", "occ_area"]
 
@@ -139,12 +141,8 @@ def fixed_rule_exact(shape: Any, kinds: dict[str, int] | None = None) -> bool:
             continue
         if _GEOM_NAMES.get(type(surface).__name__) not in ANALYTIC_FACES:
             return False
-        explorer = k.Explorer(face, k.EDGE)
-        while explorer.More():
-            edge = k.TopoDS.Edge(explorer.Current())
-            explorer.Next()
-            if not k.BRep_Tool.Degenerated_s(edge) and not _iso_line(
-                    k, k.BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)):
+        for edge in face_edges(face, degenerate=False):
+            if not _iso_line(k, k.BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)):
                 return False
     return True
 

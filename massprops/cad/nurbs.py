@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from massprops.cad.occ import face_edges
 from massprops.tolerances import (
     CAD_INTEGRATION_SAFETY,
     NURBS_AGREEMENT,
@@ -87,9 +88,8 @@ def _occ() -> SimpleNamespace:
         Geom_TrimmedCurve,
     )
     from OCP.GeomConvert import GeomConvert
-    from OCP.TopAbs import TopAbs_EDGE, TopAbs_REVERSED, TopAbs_WIRE
+    from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
     from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS
 
     return SimpleNamespace(BRep_Tool=BRep_Tool, Curve2d=BRepAdaptor_Curve2d,
                            BRepTools=BRepTools, Bezier=Geom_BezierSurface,
@@ -98,8 +98,8 @@ def _occ() -> SimpleNamespace:
                            ExactCurves=(Geom_Line, Geom_Circle, Geom_Ellipse, Geom_Parabola,
                                         Geom_Hyperbola, Geom_BSplineCurve, Geom_BezierCurve),
                            TrimmedCurve=Geom_TrimmedCurve, RectTrim=Geom_RectangularTrimmedSurface,
-                           GeomConvert=GeomConvert, EDGE=TopAbs_EDGE, WIRE=TopAbs_WIRE,
-                           REVERSED=TopAbs_REVERSED, Explorer=TopExp_Explorer, TopoDS=TopoDS)
+                           GeomConvert=GeomConvert, WIRE=TopAbs_WIRE,
+                           REVERSED=TopAbs_REVERSED, Explorer=TopExp_Explorer)
 
 
 def rectangle(face: Any) -> tuple[float, float, float, float] | None:
@@ -118,9 +118,8 @@ def rectangle(face: Any) -> tuple[float, float, float, float] | None:
         return None
     u1, u2, v1, v2 = k.BRepTools.UVBounds_s(face)
     tol = 1e-9 * max(u2 - u1, v2 - v1)
-    edges = k.Explorer(face, k.EDGE)
-    while edges.More():
-        curve = k.Curve2d(k.TopoDS.Edge(edges.Current()), face)
+    for edge in face_edges(face):
+        curve = k.Curve2d(edge, face)
         a, b = curve.FirstParameter(), curve.LastParameter()
         points = [curve.Value(a + (b - a) * t) for t in (0.0, 0.25, 0.5, 0.75, 1.0)]
         us = np.array([p.X() for p in points])
@@ -128,7 +127,6 @@ def rectangle(face: Any) -> tuple[float, float, float, float] | None:
         if not any(np.all(np.abs(x - side) <= tol)
                    for x, side in ((us, u1), (us, u2), (vs, v1), (vs, v2))):
             return None
-        edges.Next()
     if not isinstance(surface, (k.BSpline, k.Bezier)):
         return u1, u2, v1, v2   # the converted patch is the rectangle itself
     # the rectangle must lie in the surface's own parameter range (a periodic surface's face

@@ -6,10 +6,12 @@ import contextlib
 import os
 import sys
 from collections.abc import Iterator
+from typing import Any
 
 from massprops.errors import InputError
 
-__all__ = ["CadExtraMissingError", "quiet_stdout", "require_occ"]
+__all__ = ["CadExtraMissingError", "curve_breaks", "face_edges", "quiet_stdout",
+           "require_occ"]
 
 
 class CadExtraMissingError(InputError):
@@ -60,3 +62,31 @@ def quiet_stdout() -> Iterator[None]:
     finally:
         os.dup2(saved, 1)
         os.close(saved)
+
+
+def face_edges(face: Any, *, degenerate: bool = True) -> Iterator[Any]:
+    """The edges of ``face`` (``TopoDS_Edge``, each with its orientation in the face), in the
+    face's order; without the degenerate ones (a sphere's poles) where ``degenerate`` is False."""
+    from OCP.BRep import BRep_Tool  # optional extra, loaded by `require_occ`
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    explorer = TopExp_Explorer(face, TopAbs_EDGE)
+    while explorer.More():
+        edge = TopoDS.Edge(explorer.Current())
+        explorer.Next()
+        if degenerate or not BRep_Tool.Degenerated_s(edge):
+            yield edge
+
+
+def curve_breaks(curve: Any) -> list[float]:
+    """The parameters where the curve adaptor ``curve`` (3D or 2D) stops being infinitely smooth,
+    its ends included, ascending: the spans an integration rule may treat as one polynomial."""
+    from OCP.collections import Array1_double  # optional extra, loaded by `require_occ`
+    from OCP.GeomAbs import GeomAbs_CN
+
+    count = curve.NbIntervals(GeomAbs_CN)
+    cuts = Array1_double(1, count + 1)
+    curve.Intervals(cuts, GeomAbs_CN)
+    return [cuts.Value(i) for i in range(1, count + 2)]

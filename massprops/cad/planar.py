@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from massprops.cad.nurbs import cone_moments
+from massprops.cad.occ import curve_breaks, face_edges
 from massprops.tolerances import (
     CAD_FLAT_RTOL,
     CAD_INTEGRATION_SAFETY,
@@ -49,26 +50,22 @@ def _occ() -> SimpleNamespace:
     from OCP.BRep import BRep_Tool
     from OCP.BRepAdaptor import BRepAdaptor_Curve
     from OCP.BRepTools import BRepTools
-    from OCP.collections import Array1_double
     from OCP.Geom import (
         Geom_BezierSurface,
         Geom_BSplineSurface,
         Geom_Plane,
         Geom_RectangularTrimmedSurface,
     )
-    from OCP.GeomAbs import GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_CN, GeomAbs_Line
+    from OCP.GeomAbs import GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Line
     from OCP.gp import gp_Pnt, gp_Vec
-    from OCP.TopAbs import TopAbs_EDGE, TopAbs_REVERSED
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS
+    from OCP.TopAbs import TopAbs_REVERSED
 
-    return SimpleNamespace(BRep_Tool=BRep_Tool, Curve=BRepAdaptor_Curve, Reals=Array1_double,
-                           Plane=Geom_Plane, Trimmed=Geom_RectangularTrimmedSurface,
+    return SimpleNamespace(BRep_Tool=BRep_Tool, Curve=BRepAdaptor_Curve, Plane=Geom_Plane,
+                           Trimmed=Geom_RectangularTrimmedSurface,
                            Spline=(Geom_BSplineSurface, Geom_BezierSurface), BRepTools=BRepTools,
                            BEZIER=GeomAbs_BezierCurve, BSPLINE=GeomAbs_BSplineCurve,
-                           CN=GeomAbs_CN, LINE=GeomAbs_Line, gp_Pnt=gp_Pnt, gp_Vec=gp_Vec,
-                           EDGE=TopAbs_EDGE, REVERSED=TopAbs_REVERSED, Explorer=TopExp_Explorer,
-                           TopoDS=TopoDS)
+                           LINE=GeomAbs_Line, gp_Pnt=gp_Pnt, gp_Vec=gp_Vec,
+                           REVERSED=TopAbs_REVERSED)
 
 
 def plane_frame(face: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, float] | None:
@@ -162,12 +159,7 @@ def _pieces(face: Any) -> list[tuple[Any, float, float, int]]:
     not a polynomial: the orders start at 8, and two agreements in a row are asked)."""
     k = _occ()
     out = []
-    explorer = k.Explorer(face, k.EDGE)
-    while explorer.More():
-        edge = k.TopoDS.Edge(explorer.Current())
-        explorer.Next()
-        if k.BRep_Tool.Degenerated_s(edge):
-            continue
+    for edge in face_edges(face, degenerate=False):
         curve = k.Curve(edge)
         kind = curve.GetType()
         degree = 0
@@ -175,10 +167,7 @@ def _pieces(face: Any) -> list[tuple[Any, float, float, int]]:
             degree = 1
         elif kind in (k.BSPLINE, k.BEZIER) and not curve.IsRational():
             degree = curve.Degree()
-        count = curve.NbIntervals(k.CN)
-        cuts = k.Reals(1, count + 1)
-        curve.Intervals(cuts, k.CN)
-        breaks = [cuts.Value(i) for i in range(1, count + 2)]
+        breaks = curve_breaks(curve)
         if edge.Orientation() == k.REVERSED:
             spans = [(b, a) for a, b in zip(breaks[:-1], breaks[1:])][::-1]
         else:

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from massprops.cad.nurbs import cone_moments, spline_evaluator
+from massprops.cad.occ import curve_breaks, face_edges
 from massprops.tolerances import (
     CAD_INTEGRATION_SAFETY,
     NURBS_AGREEMENT,
@@ -57,15 +58,12 @@ def _occ() -> SimpleNamespace:
     from OCP.collections import Array1_double
     from OCP.GeomAbs import GeomAbs_CN
     from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec, gp_Vec2d
-    from OCP.TopAbs import TopAbs_EDGE, TopAbs_REVERSED
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS
+    from OCP.TopAbs import TopAbs_REVERSED
 
     return SimpleNamespace(BRep_Tool=BRep_Tool, Curve2d=BRepAdaptor_Curve2d,
                            Surface=BRepAdaptor_Surface, Reals=Array1_double, CN=GeomAbs_CN,
                            gp_Pnt=gp_Pnt, gp_Pnt2d=gp_Pnt2d, gp_Vec=gp_Vec, gp_Vec2d=gp_Vec2d,
-                           EDGE=TopAbs_EDGE, REVERSED=TopAbs_REVERSED, Explorer=TopExp_Explorer,
-                           TopoDS=TopoDS)
+                           REVERSED=TopAbs_REVERSED)
 
 
 def trimmed_face(face: Any, apex: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -112,12 +110,9 @@ def _pieces(face: Any, u_breaks: np.ndarray, v_breaks: np.ndarray) -> list[tuple
     surface (u = const or v = const)."""
     k = _occ()
     out = []
-    explorer = k.Explorer(face, k.EDGE)
-    while explorer.More():
-        edge = k.TopoDS.Edge(explorer.Current())
-        explorer.Next()
+    for edge in face_edges(face):
         curve = k.Curve2d(edge, face)
-        cuts = list(_breaks(curve.NbIntervals(k.CN), curve.Intervals))
+        cuts = curve_breaks(curve)
         for a, b in zip(cuts[:-1], cuts[1:]):
             inner = [a, b]
             for axis, lines in ((0, u_breaks[1:-1]), (1, v_breaks[1:-1])):
