@@ -12,8 +12,9 @@ scene's text, so an edited scene recomputes).
         [--factors 4,2,1,0.5] [--repeat 3] [--tree /tmp/before] [--reference FILE.npz]
 
 Steps are multiples of the scene's default step (simulate.default_step). Wall: the main run only
-(`run_once`, kernel compiled and warm), best of --repeat, each tree in its own process, the
-processes interleaved repeat by repeat. Timings on a shared machine only ever grow.
+(`_one_run.run_any`: simulate without its estimate, kernel compiled and warm), best of
+--repeat, each tree in its own process, the processes interleaved repeat by repeat. Timings on
+a shared machine only ever grow.
 """
 
 from __future__ import annotations
@@ -33,12 +34,6 @@ REF_RTOLS = (1e-13, 1e-12)
 REF_MAX_STEPS = 60_000_000
 
 
-def _world(scene, program, run):
-    from massprops.dynamics.frames import to_world
-
-    return to_world(scene, run.t, run.y, program, with_energy=False)
-
-
 def _stack(traj) -> np.ndarray:
     return np.hstack([traj.t[:, None], traj.position, traj.orientation, traj.velocity,
                       traj.angular_velocity])
@@ -53,10 +48,10 @@ def _unstack(a: np.ndarray):
 
 def reference(scene_path: str, cache: Path | None, samples: int):
     """(truth, its own accuracy) in the contract's metric, from the cache when it matches."""
+    from _one_run import run_any
+
     from massprops.dynamics.accuracy import Scales, state_error
-    from massprops.dynamics.integrators import INTEGRATORS
     from massprops.dynamics.program import compile_forces
-    from massprops.dynamics.runner import run_once
     from massprops.dynamics.scene import load_scene
 
     key = hashlib.sha256(Path(scene_path).read_bytes()).hexdigest()[:16] + f"-{samples}"
@@ -66,14 +61,12 @@ def reference(scene_path: str, cache: Path | None, samples: int):
             return _unstack(stored["truth"]), float(stored["accuracy"])
     scene = load_scene(scene_path)
     program = compile_forces(scene)
-    t_out = np.linspace(0.0, scene.time.duration, samples + 1)
     runs = []
     for rtol in REF_RTOLS:
-        run = run_once(scene, program, INTEGRATORS["dop853"], rtol, t_out,
-                       max_steps=REF_MAX_STEPS)
+        run = run_any(scene, program, "dop853", rtol, samples, max_steps=REF_MAX_STEPS)
         if run.failure is not None:
             raise SystemExit(f"reference run at rtol {rtol} failed: {run.failure}")
-        runs.append(_world(scene, program, run))
+        runs.append(run.trajectory)
     scales = Scales.of(scene.body.size, runs[0], scene.time.duration)
     accuracy = state_error(runs[0], runs[1], scales) / 9
     if cache is not None:
@@ -83,11 +76,11 @@ def reference(scene_path: str, cache: Path | None, samples: int):
 
 def measure(scene_path: str, factors: list[float], samples: int, reference_file: str) -> list:
     """One process: every factor once (compiled warm first), error against the cached truth."""
+    from _one_run import run_any
+
     from massprops.dynamics.accuracy import Scales, state_error
     from massprops.dynamics.compiled.compiling import prepare
-    from massprops.dynamics.integrators import INTEGRATORS
     from massprops.dynamics.program import compile_forces
-    from massprops.dynamics.runner import run_once
     from massprops.dynamics.scene import load_scene
     from massprops.dynamics.simulate import default_step
 
@@ -96,19 +89,14 @@ def measure(scene_path: str, factors: list[float], samples: int, reference_file:
     stored = np.load(reference_file)
     truth = _unstack(stored["truth"])
     scales = Scales.of(scene.body.size, truth, scene.time.duration)
-    spec = INTEGRATORS["implicit"]
     prepare(["implicit"])
     h0 = default_step(scene, program, stiff=True)
-    t_out = np.linspace(0.0, scene.time.duration, samples + 1)
     rows = []
     for factor in factors:
-        run = run_once(scene, program, spec, factor * h0, t_out)
-        error = state_error(_world(scene, program, run), truth, scales) \
-            if run.failure is None else None
-        steps, nfev, rejected, njev, status = (int(x) for x in run.stats)
-        rows.append({"factor": factor, "h": factor * h0, "steps": steps, "nfev": nfev,
-                     "rejected": rejected, "njev": njev, "status": status, "wall": run.wall,
-                     "error": error})
+        run = run_any(scene, program, "implicit", factor * h0, samples)
+        error = state_error(run.trajectory, truth, scales) if run.failure is None else None
+        rows.append({"factor": factor, "h": factor * h0, "steps": run.steps,
+                     "nfev": run.evaluations, "wall": run.wall, "error": error})
     return rows
 
 
@@ -148,14 +136,13 @@ def main() -> None:
                 for kept, row in zip(best[label], rows):
                     kept["wall"] = min(kept["wall"], row["wall"])
     print(f"{'tree':>6s} {'h/h0':>5s} {'h (s)':>9s} {'steps':>8s} {'nfev':>9s} {'nfev/st':>7s} "
-          f"{'rejected':>8s} {'njev':>8s} {'wall (s)':>8s} {'error':>9s}")
+          f"{'wall (s)':>8s} {'error':>9s}")
     for i, factor in enumerate(factors):
         for label in trees:
             r = best[label][i]
             err = "failed" if r["error"] is None else f"{r['error']:.2e}"
             print(f"{label:>6s} {factor:5g} {r['h']:9.3g} {r['steps']:8d} {r['nfev']:9d} "
-                  f"{r['nfev'] / max(r['steps'], 1):7.1f} {r['rejected']:8d} {r['njev']:8d} "
-                  f"{r['wall']:8.3f} {err:>9s}")
+                  f"{r['nfev'] / max(r['steps'], 1):7.1f} {r['wall']:8.3f} {err:>9s}")
 
 
 if __name__ == "__main__":

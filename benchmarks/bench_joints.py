@@ -32,13 +32,13 @@ from pathlib import Path
 import _scipy_model as peer  # the script's folder is on sys.path: these are its neighbours
 import numpy as np
 from _lagrange_reference import LagrangeReference
+from _one_run import run_any
 
 from massprops.dynamics.accuracy import Scales, state_error
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.precision import MIN_TIMED_S
 from massprops.dynamics.program import compile_forces
-from massprops.dynamics.runner import run_once
 from massprops.dynamics.scene import load_scene, parse_scene
 from massprops.dynamics.simulate import simulate
 from massprops.rotation import rotation_angle_between
@@ -84,18 +84,22 @@ def parse(text: str, name: str):
     return parse_scene(text, source=name, base_dir=SAMPLES)
 
 
-def timed(scene, program, spec, setting, t_out):
+SAMPLED = 10
+"""Every run is sampled at 11 equally spaced times (`_one_run.run_any`)."""
+
+
+def timed(scene, program, name, setting):
     """(run, best wall s): the compiled run repeated until MIN_TIMED_S used (at most 5)."""
-    run = run_once(scene, program, spec, setting, t_out)
+    run = run_any(scene, program, name, setting, SAMPLED)
     wall, spent, tries = run.wall, run.wall, 1
     while spent < MIN_TIMED_S and tries < 5:
-        again = run_once(scene, program, spec, setting, t_out)
+        again = run_any(scene, program, name, setting, SAMPLED)
         wall, spent, tries = min(wall, again.wall), spent + again.wall, tries + 1
     return run, wall
 
 
-def error_of(scene, program, run, truth, scales) -> float:
-    return state_error(to_world(scene, run.t, run.y, program, with_energy=False), truth, scales)
+def error_of(run, truth, scales) -> float:
+    return state_error(run.trajectory, truth, scales)
 
 
 def ladder(spec) -> list[float]:
@@ -111,9 +115,7 @@ def part_a() -> None:
           f"{TARGET_ERROR:g} (target <= {TARGET_MS:g} ms of integration)")
     scene = parse(TOP_AS_JOINT, "top-as-joint")
     program = compile_forces(scene)
-    t_out = np.linspace(0.0, 5.0, 11)
-    truth_run = run_once(scene, program, INTEGRATORS["exact"], 0.0, t_out)
-    truth = to_world(scene, truth_run.t, truth_run.y, program, with_energy=False)
+    truth = run_any(scene, program, "exact", 0.0, SAMPLED).trajectory
     scales = Scales.of(scene.body.size, truth, 5.0)
     print(f"{'integrator':>12} {'setting':>10} {'error':>9} {'steps':>8} {'evals':>9} "
           f"{'wall':>10} {'/ target':>9}")
@@ -124,19 +126,19 @@ def part_a() -> None:
         for setting in ladder(spec):
             if spec.kind == "fixed" and 5.0 / setting > 2e6:
                 break
-            run = run_once(scene, program, spec, setting, t_out)
-            if error_of(scene, program, run, truth, scales) <= TARGET_ERROR:
+            run = run_any(scene, program, name, setting, SAMPLED)
+            if error_of(run, truth, scales) <= TARGET_ERROR:
                 reached = setting
                 break
         if reached is None:
             print(f"{name:>12} {'—':>10}  does not reach {TARGET_ERROR:g} within its ladder")
             continue
-        run, wall = timed(scene, program, spec, reached, t_out)
-        err = error_of(scene, program, run, truth, scales)
+        run, wall = timed(scene, program, name, reached)
+        err = error_of(run, truth, scales)
         ms = 1e3 * wall
         best = min(best, ms) if name != "exact" else best
         note = "  (the reference itself: see (c) for its error)" if name == "exact" else ""
-        print(f"{name:>12} {reached:>10.3g} {err:>9.2e} {run.stats[0]:>8d} {run.stats[1]:>9d} "
+        print(f"{name:>12} {reached:>10.3g} {err:>9.2e} {run.steps:>8d} {run.evaluations:>9d} "
               f"{ms:>8.3f}ms {ms / TARGET_MS:>8.3f}x{note}")
     print(f"    fastest time-stepping method: {best:.3g} ms = {best / TARGET_MS:.3f} of the "
           f"{TARGET_MS:g} ms target ({'met' if best <= TARGET_MS else 'MISSED'})\n")
@@ -202,10 +204,9 @@ def part_d() -> None:
     print("(d) spherical pendulum, 5 s: 1e8 N/m spring in scipy Radau vs the joint in massprops")
     held, sprung = parse(HELD, "held"), parse(SPRUNG, "sprung")
     peer.check_same_equations(sprung)
-    t_out = np.linspace(0.0, 5.0, 11)
     p_held = compile_forces(held)
-    truth_run = run_once(held, p_held, INTEGRATORS["exact"], 0.0, t_out)
-    truth = to_world(held, truth_run.t, truth_run.y, p_held, with_energy=False)
+    truth = run_any(held, p_held, "exact", 0.0, SAMPLED).trajectory
+    t_out = truth.t  # scipy's samples at the truth's times
     scales = Scales.of(held.body.size, truth, 5.0)
     # the spring starts where the joint does, its centre of mass sagged by its static m g / k
     sag = np.array([0.0, 0.0, -9.81 * 1.0 / 1e8])
@@ -233,14 +234,14 @@ def part_d() -> None:
         spec = INTEGRATORS[name]
         if setting is None:  # the loosest rtol whose error is within the spring's floor
             for setting in ladder(spec):
-                run = run_once(held, p_held, spec, setting, t_out)
-                if error_of(held, p_held, run, truth, scales) <= floor:
+                run = run_any(held, p_held, name, setting, SAMPLED)
+                if error_of(run, truth, scales) <= floor:
                     break
-        run, wall = timed(held, p_held, spec, setting, t_out)
-        err = error_of(held, p_held, run, truth, scales)
+        run, wall = timed(held, p_held, name, setting)
+        err = error_of(run, truth, scales)
         ours.append(wall)
         print(f"{'massprops joint ' + name + (f' rtol {setting:g}' if setting else ''):>34} "
-              f"{err:>15.2e} {run.stats[1]:>9d} {wall:>9.3g}s")
+              f"{err:>15.2e} {run.evaluations:>9d} {wall:>9.3g}s")
     print(f"  scipy Radau (spring) at its best error {floor:.1e} took {scipy_best[1]:.3g} s: "
           f"{scipy_best[1] / ours[1]:.0f}x massprops dop853 and {scipy_best[1] / ours[0]:.0f}x "
           "massprops exact (the joint, to an error at least as small)\n")

@@ -87,6 +87,11 @@ def body(moments=(1.0, 2.0, 3.0), mass=2.0):
     return RigidBody(float(mass), np.array(moments, float), np.eye(3), np.zeros(3), 1.0)
 
 
+_SCENES: dict[int, tuple] = {}
+"""id(program) -> (program, its scene) of every `program_for`: `integrate` runs the scene on the
+systems engine (the program is kept so that its id is not reused)."""
+
+
 def program_for(forces, rigid=None):
     """The compiled force program of ``forces`` acting on ``rigid`` (default `body()`)."""
     from massprops.dynamics.model import InitialState, OutputSettings, Scene, TimeSettings
@@ -94,7 +99,14 @@ def program_for(forces, rigid=None):
 
     scene = Scene(rigid or body(), InitialState(), tuple(forces), TimeSettings(1.0),
                   OutputSettings())
-    return compile_forces(scene)
+    program = compile_forces(scene)
+    _SCENES[id(program)] = (program, scene)
+    return program
+
+
+def scene_of(program):
+    """The scene `program_for` made ``program`` of."""
+    return _SCENES[id(program)][1]
 
 
 def state(r=(0, 0, 0), v=(0, 0, 0), q=(1, 0, 0, 0), w=(0, 0, 0)) -> np.ndarray:
@@ -115,12 +127,16 @@ class Run(NamedTuple):
 
 def integrate(name, program, y0, duration, setting, t_out=(), rot_only=False) -> Run:
     """Walk [0, duration] segment by segment, split at the force windows' edges, as simulate
-    does, calling the registry entry ``name`` directly (no simulate machinery in between)."""
-    from massprops.dynamics.integrators import INTEGRATORS
+    does: a one-body kernel's registry entry ``name`` called directly, a time-stepping method
+    on the systems engine's step loop (`_on_the_engine`), no simulate machinery in between.
+    States are the principal-frame [r, v, q, ω] (``rot_only``: [q, ω]) of `state`."""
+    from massprops.dynamics.integrators import INTEGRATORS, SYSTEM_METHODS
     from massprops.dynamics.integrators.base import STATUS
 
-    spec = INTEGRATORS[name]
     t_out = np.asarray(t_out, dtype=np.float64)
+    if name in SYSTEM_METHODS:
+        return _on_the_engine(name, program, y0, duration, setting, t_out, rot_only)
+    spec = INTEGRATORS[name]
     y = y0.copy()
     y_out = np.full((t_out.size, y.size), np.nan)
     stats = np.zeros(5, dtype=np.int64)
@@ -138,6 +154,55 @@ def integrate(name, program, y0, duration, setting, t_out=(), rot_only=False) ->
         if stats[STATUS] or t_reached < t1:
             break
     return Run(y, y_out, stats, err, t_reached)
+
+
+def _on_the_engine(name, program, y0, duration, setting, t_out, rot_only) -> Run:
+    """`integrate` for a method of the systems engine: the program's scene from ``y0`` as the
+    system of one body, stepped by `systems.integrate.integrate` (the loop `simulate` runs),
+    its samples turned back into principal-frame states (the test bodies' principal axes are
+    their body axes); a failed run ends at its last finite sample. ``err`` is 0 (the engine
+    keeps no summed local estimate); stats are [steps, evaluations, rejected, 0, 1 if the run
+    failed]."""
+    import dataclasses
+
+    from massprops.dynamics.model import InitialState, TimeSettings
+    from massprops.dynamics.systems.integrate import integrate as step_loop
+    from massprops.dynamics.systems.one_body import as_system
+    from massprops.dynamics.systems.outputs import evaluate_states
+    from massprops.dynamics.systems.run import _floors, _windows, prepare
+
+    scene = scene_of(program)
+    assert np.array_equal(scene.body.principal_axes, np.eye(3)), "principal axes = body axes"
+    full = np.concatenate([np.zeros(6), y0]) if rot_only else np.asarray(y0, np.float64)
+    initial = InitialState(full[0:3].copy(), full[6:10].copy(), full[3:6].copy(),
+                           full[10:13].copy(), "body")
+    scene = dataclasses.replace(scene, initial=initial, time=TimeSettings(float(duration)))
+    system_scene = as_system(scene)
+    system, y_start, _ = prepare(system_scene)
+    times = np.unique(np.append(t_out, float(duration)))
+    run = step_loop(system, y_start, times, float(setting), _floors(system, duration),
+                    _windows(system_scene), method=name)
+
+    def states(t, y):
+        """(n, 13) principal-frame states of the engine's (n, ny) states at times t."""
+        s = evaluate_states(system, t, y)
+        q, w_world = s.orientation[:, 0], s.angular_velocity[:, 0]
+        w_body = np.einsum("nji,nj->ni", rotation_matrices(q), w_world)
+        return np.hstack([s.position[:, 0], s.velocity[:, 0], q, w_body])
+
+    good = np.isfinite(run.y_out).all(axis=1)
+    y_all = np.full((times.size, 13), np.nan)
+    if good.any():
+        y_all[good] = states(times[good], run.y_out[good])
+    failed = run.failure is not None
+    # a failed run: reached as far as its last finite sample (the engine's samples stop there)
+    last = int(np.flatnonzero(good)[-1]) if good.any() else 0
+    t_reached = float(times[last]) if failed else float(duration)
+    y_end = y_all[last] if failed else y_all[-1]
+    keep = slice(6, 13) if rot_only else slice(0, 13)
+    rows = np.searchsorted(times, t_out)
+    stats = np.array([run.steps, run.nfev, run.rejected, 0, int(failed)], dtype=np.int64)
+    return Run(y_end[keep].copy(), y_all[rows][:, keep], stats, 0.0, t_reached)
 
 
 def quat_axis_angle(axis, angle) -> np.ndarray:

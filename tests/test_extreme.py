@@ -20,7 +20,6 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.model import (
     Drag,
     Gravity,
@@ -84,16 +83,17 @@ def test_needle_precision_cli_json(run, tmp_path):
     assert out["runs"] and all("reason" in r for r in out["runs"])
 
 
-def test_a_diverged_companion_leaves_no_zero_quaternion():
+def test_a_diverged_run_leaves_no_zero_quaternion():
     """rk4 at 4x the coarse needle rung overflows: the quaternion used to be divided by inf into
-    [0, 0, 0, 0] (finite) and reached the frames as a 'state'. Now the run fails there."""
-    from massprops.dynamics.program import compile_forces
-    from massprops.dynamics.runner import run_once, unusable_rows
-
+    [0, 0, 0, 0] (finite) and reached the frames as a 'state'. Now the run fails there, and
+    every sample it keeps is a rotation."""
     sc = scene(NEEDLE, duration=2.0, omega=(1000.0, 1.0, 0.5))
-    run = run_once(sc, compile_forces(sc), INTEGRATORS["rk4"], 0.0032, np.linspace(0, 2, 11))
-    assert run.failure is not None and run.failure.verb == "diverged"
-    assert not unusable_rows(run.y).any()
+    with pytest.raises(DivergenceError) as info:
+        simulate(sc, integrator="rk4", step=0.0032, every=0.2)
+    kept = info.value.partial.trajectory
+    assert kept.t[-1] < 2.0
+    norms = np.linalg.norm(kept.orientation, axis=1)
+    assert np.all(np.isfinite(kept.orientation)) and np.allclose(norms, 1.0, atol=1e-12)
 
 
 # --- --debug -----------------------------------------------------------------------------------

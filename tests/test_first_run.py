@@ -79,8 +79,11 @@ def test_the_compile_notice_is_one_stderr_line_on_a_cache_miss_only(tmp_path):
 
 
 def test_kernels_behind_integrator_names():
-    assert compiling.compiled_names(["exact", "splitting6", "splitting", "dop853", "dop853"]) \
-        == ["splitting", "dop853"]
+    """The splitting methods share one kernel; every time-stepping method is the systems
+    engine's; the closed form has none."""
+    assert compiling.compiled_names(["exact", "splitting6", "splitting", "dop853", "implicit"]) \
+        == ["splitting", compiling.SYSTEMS]
+    assert compiling.compiled_names(["rk4", "systems"]) == [compiling.SYSTEMS]
     assert compiling.compiled_names(["exact"]) == []
 
 

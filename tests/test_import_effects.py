@@ -67,7 +67,7 @@ def test_a_kernel_used_caches_in_massprops_folder_and_nowhere_else(tmp_path):
     code = ("import os, numba, numpy as np\n"
             "from massprops.dynamics.compiled.cache import planned_root\n"
             "from massprops.dynamics.compiled.compiling import warm_up\n"
-            "warm_up('rk4')\n"
+            "warm_up('splitting')\n"
             "print(planned_root(), repr(numba.config.CACHE_DIR),\n"
             "      'NUMBA_CACHE_DIR' in os.environ)\n")
     out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env,

@@ -16,18 +16,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from massprops.dynamics.accuracy import Scales, exact_roundoff, global_estimate, state_error
+from massprops.dynamics.budget import sample_times
 from massprops.dynamics.compiled.compiling import SYSTEMS, prepare
 from massprops.dynamics.forces import ForceProgram
 from massprops.dynamics.frames import to_world
+from massprops.dynamics.integrators import SYSTEM_METHODS
 from massprops.dynamics.model import Scene
 from massprops.dynamics.program import compile_forces
 from massprops.dynamics.runner import run_once
-from massprops.dynamics.simulate import (
-    SYSTEM_METHODS,
-    choose_integrator,
-    default_step,
-    simulate,
-)
+from massprops.dynamics.simulate import choose_integrator, default_step, simulate
 from massprops.errors import ComputationError, MassPropsError, UsageError
 
 RTOL_LADDER = tuple(10.0**-k for k in range(3, 13))
@@ -116,7 +113,7 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
 
     notice(text) is called once if compiled kernels are missing from numba's cache and are being
     compiled (all of them are made ready first: massprops.dynamics.compiled.compiling.prepare)."""
-    # deferred: the registry imports every method's module; loaded when a run starts
+    # deferred: looking at every record imports the splitting methods' kernels
     from massprops.dynamics.integrators import INTEGRATORS
 
     program = compile_forces(scene)
@@ -127,11 +124,12 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
             raise UsageError(f"{scene.source}: integrator(s) {', '.join(unknown)} do not apply "
                              f"to this scene; applicable: {', '.join(names)}")
         names = [n for n in names if n in integrators]
-    t_out = np.linspace(0.0, scene.time.duration, SAMPLES + 1)
-    # the rungs' kernels (a time-stepped method's: the systems kernel), and the reference's
-    own = [n for n in names if n not in SYSTEM_METHODS]
-    prepare([*own, *([SYSTEMS] if len(own) < len(names) else []),
-             reference_method(scene, program, INTEGRATORS)], notice)
+    # the times every rung's `simulate(every=...)` samples, so that all compare at each
+    t_out = sample_times(scene.time.duration, scene.time.duration / SAMPLES)
+    # the rungs' kernels and the reference's (a time-stepped method's: the systems kernel)
+    method = reference_method(scene, program, INTEGRATORS)
+    kernels = [n if n not in SYSTEM_METHODS else SYSTEMS for n in (*names, method)]
+    prepare(list(dict.fromkeys(kernels)), notice)
     truth, reference = reference_run(scene, program, INTEGRATORS, t_out)
     scales = Scales.of(scene.body.size, truth, scene.time.duration)
     plan = [(n, s) for n in names for s in ladder(INTEGRATORS[n], scene, program)]
@@ -192,8 +190,21 @@ def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out:
 
 
 def _trajectory(scene, program, spec, setting, t_out):
+    """The world-frame samples at ``t_out`` of one reference run of ``spec`` at ``setting``,
+    on the engine `simulate` runs it on (a time-stepped method: the systems engine, with no
+    estimate of its own: the reference checks itself against a second run)."""
+    if spec.name in SYSTEM_METHODS:
+        try:
+            result = simulate(scene, integrator=spec.name, rtol=setting, step=setting,
+                              every=scene.time.duration / SAMPLES, estimate=False)
+        except ComputationError as exc:
+            raise ComputationError(f"{scene.source}: the reference run failed: "
+                                   f"{exc.template.removeprefix(f'{scene.source}: ')}") from exc
+        if result.interrupted:  # Ctrl-C: a part of a run is no reference
+            raise KeyboardInterrupt
+        return result.trajectory
     run = run_once(scene, program, spec, setting, t_out)
-    if run.interrupted:  # Ctrl-C: a part of a run is no reference
+    if run.interrupted:
         raise KeyboardInterrupt
     if run.failure is not None:
         raise ComputationError(f"{scene.source}: the reference run failed: {run.failure}")

@@ -1,5 +1,7 @@
-"""One compiled run of one method at one setting: the segments between force-window edges, walked
-in chunks (Ctrl-C and the progress bar are served between them), dense samples, failures.
+"""One run of a one-body kernel (the splitting methods and the closed form, `integrators`) at one
+setting: the segments between force-window edges, walked in chunks (Ctrl-C and the progress bar
+are served between them), dense samples, failures. The time-stepping methods run on the systems
+engine (`simulate`, `systems.run`).
 
 The translation of the centre of mass is closed form when every force is constant in world
 (ForceProgram.translation_closed_form): only [q_p, omega'] is then integrated.
@@ -16,7 +18,6 @@ import numpy as np
 
 from massprops.dynamics import budget
 from massprops.dynamics.forces import ForceProgram
-from massprops.dynamics.integrators.base import STATUS_STEP_LIMIT
 from massprops.dynamics.model import Scene
 from massprops.dynamics.program import initial_principal_state
 from massprops.errors import ComputationError, setting_ref
@@ -25,30 +26,6 @@ from massprops.tolerances import QUATERNION_NORM_ATOL
 CHUNK_STEPS = 50_000
 """Steps per compiled call (~0.05 s): between calls Ctrl-C and the progress bar are served.
 Chunks are sized by step counts, never by timers, so results do not depend on the machine."""
-
-CALL_STEPS = 4 * CHUNK_STEPS
-"""Steps one compiled call may take at most (kernels that count their steps: adaptive ones, and
-the implicit ones, which cut a step whose Newton iteration fails into pieces): a call planned
-for CHUNK_STEPS that needs far more (a step cut into thousands of pieces) hands control back
-after ~1-2 s, so that the run bound's pace projection (budget.exhausted) and Ctrl-C are served,
-and the run goes on from where it stopped."""
-
-FIRST_CHUNK = 1 / 32
-"""An adaptive run's first call covers this fraction of the run, or CHUNK_STEPS steps of
-FIRST_STEP_RAD at the fastest rate of the start (spin, stiffest term), if that is shorter; later
-ones grow or shrink (at most ×16, at least ×½) toward CHUNK_STEPS steps, from the steps the
-previous call took. The rate cap keeps a first call of a fast-spinning, long run from taking
-hours before the run bound (budget.py) is first checked."""
-
-FIRST_STEP_RAD = 0.1
-"""Angle per step of the fastest rate assumed for sizing an adaptive run's first call."""
-
-
-def scale_floors(scene: Scene) -> np.ndarray:
-    """(4,) smallest error scales of the r, v, q, ω blocks for error-controlled methods: the body
-    size, size/duration, 1, 1/duration (the floors of the contract's metric, accuracy.Scales)."""
-    size, duration = scene.body.size, scene.time.duration
-    return np.array([size, size / duration, 1.0, 1.0 / duration])
 
 
 @dataclass(frozen=True)
@@ -91,8 +68,7 @@ def run_once(scene: Scene, program: ForceProgram, spec, setting: float, t_out: n
              max_steps: int | None = None) -> RawRun:
     """Integrate ``scene`` once with ``spec`` at ``setting``, sampled at ``t_out``; a run that
     reaches ``max_steps`` (default budget.MAX_STEPS) stops there (``exhausted``)."""
-    runner = _Runner(spec, program, setting, progress, scene.time.duration,
-                     scale_floors(scene))
+    runner = _Runner(spec, program, setting, progress, scene.time.duration)
     runner.max_steps = max_steps
     y_out, t_reached, interrupted = runner.run(initial_principal_state(scene), t_out)
     keep = t_out <= t_reached
@@ -132,12 +108,10 @@ def stability_hint(program: ForceProgram, setting: float, name: str) -> str:
     return "try a smaller step or tolerance"
 
 
-def budget_advice(spec, program: ForceProgram) -> str:
-    """What to change when a run of ``spec`` needs more steps than the run bound."""
-    what = (f"loosen {setting_ref('time.rtol')}" if spec.kind == "adaptive"
-            else f"raise {setting_ref('time.step')}")
-    advice = f"{what} or shorten time.duration"
-    if program.stiffest_rate > 0 and not spec.stiff:
+def budget_advice(program: ForceProgram) -> str:
+    """What to change when a fixed-step run needs more steps than the run bound."""
+    advice = f"raise {setting_ref('time.step')} or shorten time.duration"
+    if program.stiffest_rate > 0:
         advice += (f"; the stiffest term has rate {program.stiffest_rate:.3g}/s: integrator "
                    "implicit steps over it")
     if not program.has_torque and program.translation_closed_form:
@@ -148,15 +122,13 @@ def budget_advice(spec, program: ForceProgram) -> str:
 class _Runner:
     """Walks the segments between window edges in chunks, filling the samples."""
 
-    def __init__(self, spec, program: ForceProgram, setting: float, progress, duration: float,
-                 floors: np.ndarray):
-        self.spec, self.program, self.setting, self.floors = spec, program, setting, floors
+    def __init__(self, spec, program: ForceProgram, setting: float, progress, duration: float):
+        self.spec, self.program, self.setting = spec, program, setting
         self.progress, self.duration = progress, duration
         self.stats = np.zeros(5, dtype=np.int64)
         self.wall, self.warmup = 0.0, 0.0
         self.failure: Failure | None = None
         self.exhausted = False
-        self.spin = 0.0
         self.max_steps: int | None = None
         self.y_last = None
         self.t_now = 0.0
@@ -164,7 +136,6 @@ class _Runner:
 
     def run(self, y0: np.ndarray, t_out: np.ndarray):
         p = self.program
-        self.spin = float(np.linalg.norm(y0[10:13]))
         rot_only = p.translation_closed_form
         y_full = y0.copy()
         y_out = np.full((len(t_out), 13), np.nan)
@@ -190,10 +161,8 @@ class _Runner:
         start = time.perf_counter()
         y = (y0[6:] if rot_only else y0).copy()
         self.spec.run_segment(y, 0.0, 1e-9, self.setting if self.setting else 1e-9,
-                              (p.active(0.0), p.codes, p.params, p.mass, p.inertia, self.floors,
-                               budget.MAX_STEPS),
-                              rot_only, np.empty(0), np.empty((0, y.size)),
-                              np.zeros(5, dtype=np.int64))
+                              (p.active(0.0), p.codes, p.params, p.mass, p.inertia), rot_only,
+                              np.empty(0), np.empty((0, y.size)), np.zeros(5, dtype=np.int64))
         self.warmup = time.perf_counter() - start
 
     def _segment(self, y_full, t0, t1, active, rot_only, t_out, y_out) -> None:
@@ -204,22 +173,19 @@ class _Runner:
         sel = np.flatnonzero((t_out >= t0) & (t_out <= t1) if first else
                              (t_out > t0) & (t_out <= t1))
         accel = p.constant_force(active) / p.mass if rot_only else None
-        limit = self.max_steps or budget.MAX_STEPS
         # a segment of one or two steps (a force window shorter than the step) is stepped the
         # same way by a 2h companion, so its error is invisible to Richardson: keep the kernel's
         # own local estimate of it
         short = self.spec.kind == "fixed" and (t1 - t0) <= 2 * self.setting * (1 + 1e-12)
         t = t0
-        length = self._first_chunk(t0, t1)
+        length = CHUNK_STEPS * self.setting
         while t < t1:
             t_end = self._chunk_end(t, t0, t1, length)
             idx = sel[(t_out[sel] >= t) & (t_out[sel] <= t_end)] if t == t0 else \
                 sel[(t_out[sel] > t) & (t_out[sel] <= t_end)]
             y = y_full[6:].copy() if rot_only else y_full.copy()
             ys = np.empty((idx.size, y.size))
-            steps_before = int(self.stats[0])
-            arrays = (active, p.codes, p.params, p.mass, p.inertia, self.floors,
-                      min(limit, steps_before + CALL_STEPS))
+            arrays = (active, p.codes, p.params, p.mass, p.inertia)
             err, t_reached = self.spec.run_segment(y, t, t_end, self.setting, arrays, rot_only,
                                                    t_out[idx], ys, self.stats)
             if rot_only:
@@ -238,45 +204,24 @@ class _Runner:
             self.t_now = t_reached
             if short:
                 self.short_err += err
-            if self.stats[4] == STATUS_STEP_LIMIT and self.stats[0] < limit:
-                self.stats[4] = 0  # this call's share of steps, not the run bound: go on
-                t_end = t_reached
-            if self.stats[4] == STATUS_STEP_LIMIT:  # the run bound, inside a call
-                self.failure = Failure(self.spec.name, "stopped", t_reached,
-                                       f"it has taken {int(self.stats[0]):.3g} steps, the run "
-                                       f"bound ({setting_ref('max_steps')})",
-                                       budget_advice(self.spec, self.program))
-                self.exhausted = True
-                return
-            if self.stats[4] != 0 or t_reached < t_end:  # NaN, underflow, or stopped early
+            if self.stats[4] != 0 or t_reached < t_end:  # NaN, or stopped early
                 self.failure = self._failure_message(t_reached)
                 return
             why = budget.exhausted(int(self.stats[0]), t_end / self.duration, self.max_steps)
             if why is not None:
                 self.failure = Failure(self.spec.name, "stopped", t_end, why,
-                                       budget_advice(self.spec, self.program))
+                                       budget_advice(self.program))
                 self.exhausted = True
                 return
             if self.progress is not None:
                 self.progress(t_end / self.duration)
-            taken = max(int(self.stats[0]) - steps_before, 1)
-            length = (t_end - t) * min(16.0, max(0.5, CHUNK_STEPS / taken))
             t = t_end
 
-    def _first_chunk(self, t0: float, t1: float) -> float:
-        if self.spec.kind == "exact":  # no steps: one evaluation per sample, cost independent of t
-            return t1 - t0
-        if self.spec.kind == "fixed":
-            return CHUNK_STEPS * self.setting
-        rate = max(self.spin, self.program.stiffest_rate)
-        if rate > 0.0:
-            return min(FIRST_CHUNK * self.duration, CHUNK_STEPS * FIRST_STEP_RAD / rate)
-        return FIRST_CHUNK * self.duration
-
     def _chunk_end(self, t: float, t0: float, t1: float, length: float) -> float:
-        """End of the next call: t + length, on the segment's step grid for fixed steps."""
-        if self.spec.kind != "fixed":
-            return t1 if t + length >= t1 * (1 - 1e-12) else t + length
+        """End of the next call: t + length on the segment's step grid; the closed form takes
+        the whole segment (no steps: one evaluation per sample, its cost independent of t)."""
+        if self.spec.kind == "exact":
+            return t1
         n = max(1, math.ceil((t1 - t0) / self.setting * (1 - 1e-12)))
         h = (t1 - t0) / n
         k = round((t - t0) / h) + max(1, round(length / h))
@@ -285,7 +230,6 @@ class _Runner:
     def _failure_message(self, t_reached: float) -> Failure:
         status = int(self.stats[4])
         what = "the state became NaN or infinite" if status == 1 else \
-            "the step size fell below round-off (the problem is stiff or singular there)" \
-            if status == 2 else "the integrator stopped early"
+            "the integrator stopped early"
         return Failure(self.spec.name, "diverged", t_reached, what,
                        stability_hint(self.program, self.setting, self.spec.name))

@@ -21,6 +21,7 @@ import yaml
 
 from massprops import tolerances
 from massprops.dynamics.budget import too_fast
+from massprops.dynamics.integrators import integrator_names
 from massprops.dynamics.joints.scene import bind_scene, parse_joints, read_project
 from massprops.dynamics.model import (
     INF,
@@ -402,9 +403,6 @@ def parse_scene(text: str, *, source: str, base_dir: Path,
     forces = _forces(fields.get("forces"))
     joints, joint_fields = parse_joints(fields.get("joints"))
     if known_integrators is None:
-        # deferred: the registry imports every method's module; reading a scene needs only its names
-        from massprops.dynamics.integrators import integrator_names
-
         known_integrators = integrator_names()
     time = _time(fields["time"], known_integrators)
     output = _output(fields.get("output"), base_dir)

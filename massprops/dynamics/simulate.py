@@ -1,7 +1,7 @@
 """Run a scene: choose the method, run it beside its error-estimate companions, convert at the
 edges (frames.py), check for divergence, report diagnostics.
 
-A time-stepped method (SYSTEM_METHODS) runs the body as the system of one body
+A time-stepped method (`integrators.SYSTEM_METHODS`) runs the body as the system of one body
 (`systems.one_body`, `systems.run.simulate_system`): one engine for one body and many. Its
 samples come back here as the states the one-body edges take (`_engine_states`), so the
 trajectory, reactions and diagnostics keep the one-body contract. The closed forms and the
@@ -45,6 +45,7 @@ from massprops.dynamics.forces import (
     ForceProgram,
 )
 from massprops.dynamics.frames import Trajectory, to_world
+from massprops.dynamics.integrators import SYSTEM_METHODS
 from massprops.dynamics.integrators.base import check_rtol, ignored_settings
 from massprops.dynamics.model import Scene
 from massprops.dynamics.program import compile_forces
@@ -52,10 +53,6 @@ from massprops.dynamics.runner import RawRun, run_once, stability_hint
 from massprops.errors import ComputationError, DivergenceError, RunBudgetError, UsageError
 from massprops.parallel import CancellableJob, beside
 from massprops.rotation import canonical, matrix_to_quat, quat_multiply, quat_to_matrix
-
-SYSTEM_METHODS = ("dop853", "rk4", "midpoint", "implicit")
-"""The methods a one-body scene runs as the system of one body: every time-stepping method the
-systems engine has (decision 0024)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -125,7 +122,7 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
              step: float | None = None, every: float | None = None,
              progress: Callable[[float], None] | None = None,
              notice: Callable[[str], None] | None = None,
-             max_steps: int | None = None) -> SimulationResult:
+             max_steps: int | None = None, estimate: bool = True) -> SimulationResult:
     """Integrate ``scene``; options override the scene's time/output settings.
 
     progress(fraction) is called between compiled chunks of the main run, and while waiting for
@@ -134,11 +131,13 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     compiled kernels are not in numba's cache and are being compiled (massprops.dynamics
     .compiling.prepare). Ctrl-C during the run returns the samples computed so far with
     ``interrupted=True`` (the caller exits 130). ``max_steps`` bounds every run of the call
-    (default budget.MAX_STEPS; see massprops.dynamics.budget).
+    (default budget.MAX_STEPS; see massprops.dynamics.budget). ``estimate=False`` leaves out the
+    error estimate's companion runs (``error_estimate`` is then None; a closed form's round-off
+    bound costs nothing and stays).
     Raises DivergenceError (exit 3) naming the time and the likely cause, RunBudgetError (exit 3)
     when the run bound refuses or stops the run (both carry what was computed).
     """
-    # deferred: the registry imports every method's module; loaded when a run starts
+    # deferred: the registry imports a method's module as it is looked up
     from massprops.dynamics.integrators import INTEGRATORS
 
     program = compile_forces(scene)
@@ -153,7 +152,7 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     spec = INTEGRATORS[name]
     ignored = ignored_settings(spec, rtol, step)
     result = _simulate(scene, program, spec, name, reason, rtol, step, every, progress, notice,
-                       max_steps)
+                       max_steps, estimate)
     if ignored is None:
         return result
     return dataclasses.replace(result, notes=(f"{scene.source}: {ignored}", *result.notes))
@@ -161,7 +160,7 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
 
 def _simulate(scene: Scene, program: ForceProgram, spec, name: str, reason: str,
               rtol: float | None, step: float | None, every: float | None, progress, notice,
-              max_steps: int | None) -> SimulationResult:
+              max_steps: int | None, estimate: bool = True) -> SimulationResult:
     """`simulate` once its method is known (``spec``, ``name`` and why, ``reason``)."""
     if spec.kind == "exact" and not program.exact_solvable:
         raise UsageError(f"{scene.source}: integrator exact solves only torque-free scenes with "
@@ -178,9 +177,10 @@ def _simulate(scene: Scene, program: ForceProgram, spec, name: str, reason: str,
     if name in SYSTEM_METHODS:
         return _as_system(scene, program, spec, name, reason, setting,
                           every if every is not None else scene.output.every, progress, notice,
-                          max_steps)
+                          max_steps, estimate)
     prepare([spec.name], notice)
-    side = _start_companions(scene, program, spec, setting, t_out, max_steps)
+    side = _start_companions(scene, program, spec, setting, t_out, max_steps) \
+        if estimate else None
     wait = True
     try:
         return _run_and_check(scene, program, spec, name, reason, setting, t_out, progress, side,
@@ -220,7 +220,7 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
         raise RunBudgetError(f"{scene.source}: {run.failure}", partial=result)
     if run.failure is not None:
         raise DivergenceError(f"{scene.source}: {run.failure}", partial=result)
-    if not run.interrupted:
+    if not run.interrupted and (side is not None or spec.kind == "exact"):
         others = None if side is None else _companion_runs(side, progress)
         diagnostics["error_estimate"] = _error_estimate(scene, program, spec, setting, traj,
                                                         others, run.short_err)
@@ -233,7 +233,7 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
 # --- one body as the system of one body ---------------------------------------------------------
 def _as_system(scene: Scene, program: ForceProgram, spec, name: str, reason: str,
                setting: float, every: float | None, progress, notice,
-               max_steps: int | None) -> SimulationResult:
+               max_steps: int | None, estimate: bool = True) -> SimulationResult:
     """``scene`` run with ``name`` at ``setting`` as the system of one body, its result in the
     one-body contract's terms; a failure carries its samples the same way (``partial``)."""
     # deferred: the systems engine, loaded when a run starts (as the registry is)
@@ -248,8 +248,8 @@ def _as_system(scene: Scene, program: ForceProgram, spec, name: str, reason: str
     try:
         run = simulate_system(as_system(scene), integrator=name,
                               rtol=None if fixed else setting, step=setting if fixed else None,
-                              every=every, max_steps=max_steps, progress=progress,
-                              interruptible=True)
+                              every=every, estimate=estimate, max_steps=max_steps,
+                              progress=progress, interruptible=True)
     except ComputationError as exc:  # said as one body's failures are, with its samples
         if exc.partial is None:
             raise
@@ -381,8 +381,21 @@ def _error_estimate(scene, program, spec, setting, traj, others: list[RawRun] | 
     blind = short_err * max(1 / scales.size, 1 / scales.velocity, 2.0,
                             1 / scales.angular_velocity)
     estimate = global_estimate(spec.kind, spec.order, state_error(traj, first, scales),
-                               d_companions, spec.estimate_order) + blind
+                               d_companions, spec.estimate_order) + blind \
+        + _position_roundoff(traj, scales, int(round(scene.time.duration / setting)))
     return estimate if math.isfinite(estimate) else None  # a companion ran away: size unknown
+
+
+def _position_roundoff(traj: Trajectory, scales: Scales, steps: int) -> float:
+    """The round-off of ``steps`` position updates in the contract's metric, which the step
+    companions cannot see (they round alike): each update of r is rounded to eps |r|, and the
+    roundings add up as a random walk, 4 eps |r|max / size √steps. It matters far from the
+    origin: a body at 1e5 sizes taking 1e5 steps of splitting6 (far.yaml) has ~3e-8 of it where
+    its truncation estimate says 5e-10."""
+    eps = float(np.finfo(float).eps)
+    with np.errstate(over="ignore"):
+        reach = float(np.max(np.linalg.norm(traj.position, axis=1))) / scales.size
+    return 4 * eps * reach * math.sqrt(max(steps, 1))
 
 
 def _setting(spec, scene: Scene, program: ForceProgram, rtol: float | None,

@@ -33,16 +33,15 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-COMPILE_SECONDS = {"rk4": 2.0, "dop853": 3.0, "implicit": 8.0, "midpoint": 5.0,
-                   "splitting": 10.0, "splitting4": 10.0, "splitting6": 10.0, "systems": 70.0}
-"""About how long (s, one idle core) compiling each method's kernels takes from an empty cache,
-from benchmarks/bench_first_run.py (the systems' kernel: 66 s of CPU, 77 s of wall time on a
-loaded machine, 2026-12-02); only for the notice's estimate and for sharing the work between two
+COMPILE_SECONDS = {"splitting": 10.0, "systems": 70.0}
+"""About how long (s, one idle core) compiling each kernel takes from an empty cache, from
+benchmarks/bench_first_run.py (the systems' kernel: 66 s of CPU, 77 s of wall time on a loaded
+machine, 2026-12-02); only for the notice's estimate and for sharing the work between two
 processes. The three splitting methods share one kernel."""
 
 SYSTEMS = "systems"
-"""The name of the systems' one kernel (`systems_kernel.run_segment`: every method a system
-runs with), prepared like an integrator's kernel."""
+"""The name of the systems' one kernel (`systems_kernel.run_segment`: every time-stepping
+method, `integrators.SYSTEM_METHODS`, for one body and many), prepared like a method's kernel."""
 
 SHARED_KERNEL = {"splitting4": "splitting", "splitting6": "splitting"}
 """Methods whose compiled kernel is another's (compiling one compiles both)."""
@@ -66,16 +65,17 @@ def whole_process(alone: bool = True) -> None:
 
 
 def compiled_names(names: Sequence[str]) -> list[str]:
-    """The distinct compiled kernels behind ``names`` (integrator names), in order; the closed
-    form and methods sharing a kernel drop out."""
+    """The distinct compiled kernels behind ``names`` (integrator names, or SYSTEMS), in order:
+    a time-stepping method's is the systems kernel; the closed form has none; methods sharing a
+    kernel name it once."""
     # deferred: the registry imports the kernels' modules; needed only when preparing them
-    from massprops.dynamics.integrators import INTEGRATORS
+    from massprops.dynamics.integrators import INTEGRATORS, SYSTEM_METHODS
 
     out: list[str] = []
     for name in names:
         if name != SYSTEMS and INTEGRATORS[name].kind == "exact":
             continue
-        kernel = SHARED_KERNEL.get(name, name)
+        kernel = SYSTEMS if name in SYSTEM_METHODS else SHARED_KERNEL.get(name, name)
         if kernel not in out:
             out.append(kernel)
     return out
@@ -144,9 +144,8 @@ def warm_up(name: str) -> None:
     y = np.zeros(13)
     y[6] = 1.0
     arrays = (np.ones(1, dtype=np.bool_), np.array([GRAVITY], dtype=np.int64),
-              np.zeros((1, NPAR)), 1.0, np.array([1.0, 2.0, 3.0]), np.ones(4), 1000)
-    setting = 1e-6 if spec.kind == "adaptive" else 1e-9
-    spec.run_segment(y, 0.0, 1e-9, setting, arrays, False, np.empty(0), np.empty((0, 13)),
+              np.zeros((1, NPAR)), 1.0, np.array([1.0, 2.0, 3.0]))
+    spec.run_segment(y, 0.0, 1e-9, 1e-9, arrays, False, np.empty(0), np.empty((0, 13)),
                      np.zeros(5, dtype=np.int64))
 
 
@@ -261,8 +260,8 @@ def helper_main(kernels: list[str]) -> None:
 
 def ready_side_by_side(names: Sequence[str] | None = None, jobs: int = 2,
                        timeout: float = 1800.0, env: dict | None = None) -> int:
-    """Load or compile the kernels of the integrators ``names`` (default: every stepping one and
-    the systems' kernel) into the cache, in ``jobs`` fresh processes side by side (one kernel is
+    """Load or compile the kernels of the integrators ``names`` (default: every one, the systems'
+    kernel among them) into the cache, in ``jobs`` fresh processes side by side (one kernel is
     one process's work); returns the number of functions numba compiled (0: all were cached).
     The build step and the test suite's start use it; a run uses `prepare`.
     Raises RuntimeError when a process fails or takes longer than ``timeout`` seconds."""

@@ -1,10 +1,10 @@
 """The registry's fixed-step methods over a system's y = [q, u], compiled: the step loop of one
 segment, called by the systems' one compiled entry (`systems_kernel.run_segment`).
 
-The same methods as the one-body kernels (`dynamics.integrators`: ``rk4``, order 4; ``midpoint``,
-the implicit midpoint rule, order 2, symplectic; ``implicit``, 3-stage Radau IIA, order 5,
-L-stable) over the right-hand side of a system program (`systems_step.rhs`), with what a system
-adds after every step, as `systems_dop853` does: the quaternion coordinates renormalised, (q, u)
+The registry's methods (`dynamics.integrators.stepped`: ``rk4``, order 4; ``midpoint``, the
+implicit midpoint rule, order 2, symplectic; ``implicit``, 3-stage Radau IIA, order 5, L-stable)
+over the right-hand side of a system program (`systems_step.rhs`), with what a system adds after
+every step, as `systems_dop853` does: the quaternion coordinates renormalised, (q, u)
 projected onto Φ = 0 and Φ̇ = 0 (`systems_step.project`), f evaluated at the projected end, the
 singular-pose test (`systems_step.accept`). Samples inside a step come from the cubic Hermite
 interpolant of its projected ends (values and derivatives), each projected in turn.
@@ -17,8 +17,7 @@ error scales (each component's floor and running max): they stop when the predic
 correction η‖Δ‖ is below NEWTON_TOL, or the correction is at round-off. Where Radau's Newton
 fails with the Jacobian at the step's start (it turns within the step: a stiff spring on a
 fast-spinning body), the step is tried with the three stage Jacobians J(y + Z_s), re-evaluated
-at the iterate while it converges slowly, as the one-body kernel does
-(`dynamics.integrators.radau`), and they stay in use for RETRY_FIRST steps, doubling up to
+at the iterate while it converges slowly, and they stay in use for RETRY_FIRST steps, doubling up to
 RETRY_MAX each time the one Jacobian fails again. Where Newton still fails, the step is taken
 again in 2, 4, ... MAX_PIECES pieces, each a full step (projected, tested); beyond that the run
 stops with UNDERFLOW. The number of pieces persists: it halves after two clean steps (a
@@ -51,13 +50,7 @@ from massprops.dynamics.compiled.systems_step import (
 from massprops.dynamics.compiled.unowned import by_ref
 from massprops.dynamics.integrators._newton import NEWTON_TOL, ROUNDOFF, lu_factor, lu_solve
 from massprops.dynamics.integrators._shared import EPS, step_count, worst
-from massprops.dynamics.integrators.radau import (
-    RETRY_FIRST,
-    RETRY_MAX,
-    STAGE_REFRESHES,
-    STAGE_SLOW,
-)
-from massprops.dynamics.integrators.radau import A as RADAU_A
+from massprops.dynamics.integrators.stepped import RADAU_A as _RADAU_ROWS
 
 RK4, MIDPOINT, RADAU = 0, 1, 2
 """Method codes of `segment` (and of `systems_kernel.run_segment`)."""
@@ -67,7 +60,7 @@ METHODS = {"rk4": RK4, "midpoint": MIDPOINT, "implicit": RADAU}
 
 ITERATIONS = 20
 """Newton iterations allowed per step (they start from an explicit Euler guess, not from the
-last step's polynomial as the one-body kernels' do: a few more may be needed)."""
+last step's collocation polynomial: a few more may be needed than such a start would take)."""
 
 MAX_PIECES = 64
 """Pieces a step may be cut into where Newton fails before the run stops."""
@@ -79,8 +72,21 @@ step beyond an explicit method's stability)."""
 NEWTON_FAILED = -1
 """Internal status of a step whose Newton iterations failed (then cut into pieces)."""
 
+RADAU_A = np.array(_RADAU_ROWS)
+"""(3, 3) Radau IIA's matrix (the registry's tableau, `integrators.stepped`)."""
+
 RADAU_C = np.array([RADAU_A[0].sum(), RADAU_A[1].sum(), 1.0])
 """(3,) Radau IIA's nodes (the row sums of A)."""
+
+STAGE_SLOW = 0.1
+"""With stage Jacobians, a rate above this re-evaluates them at the current iterate."""
+
+STAGE_REFRESHES = 2
+"""Re-evaluations of the stage Jacobians allowed within one attempt of a step."""
+
+RETRY_FIRST, RETRY_MAX = 4, 256
+"""Steps taken with stage Jacobians before the one-Jacobian iteration is tried again: RETRY_FIRST
+after it last worked, doubling (up to RETRY_MAX) each time it fails again."""
 
 LEVEL, STREAK, STAGE, CALM, RETRY, TRYING = range(6)
 MODE_SIZE = 6

@@ -18,13 +18,8 @@ STEPS, NFEV, REJECTED, NJEV, STATUS = range(5)
 """Indices into ``stats``: accepted steps, right-hand-side evaluations, rejected steps (adaptive
 error test or failed Newton iterations), Jacobian evaluations, status."""
 
-STATUS_OK, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_STEP_LIMIT = 0, 1, 2, 3
-"""``stats[STATUS]``: 0 fine; 1 a NaN/inf appeared (the state is the last finite one); 2 the step
-fell below round-off (1e-14 of the time scale): the problem is stiff or singular there; 3 the
-caller's step limit was reached (the state is valid at t_reached: the run bound, budget.py)."""
-
-NO_STEP_LIMIT = 2**62
-"""The step limit of a scaled kernel when the caller gives none."""
+STATUS_OK, STATUS_NONFINITE = 0, 1
+"""``stats[STATUS]``: 0 fine; 1 a NaN/inf appeared (the state is the last finite one)."""
 
 KINDS = ("fixed", "adaptive", "exact")
 
@@ -41,7 +36,8 @@ class IntegratorSpec:
         (closed form, no steps, ``setting`` ignored).
     order : classical order of the step-point values (0 for kind "exact": no truncation).
     description : one line, shown in ``--help``.
-    run_segment : the checked entry point (`segment_runner`), see the package docstring.
+    run_segment : the checked entry point of a one-body kernel (`segment_runner`), see the
+        package docstring; None for a method the systems engine steps (`stepped`).
     stiff : stable far beyond the explicit step limit (~2.8 / ForceProgram.stiffest_rate).
     estimate_order : the highest order the error estimate's Richardson rule may assume (None:
         ``order``); lower where the order can fall on stiff problems (order reduction).
@@ -55,7 +51,7 @@ class IntegratorSpec:
     kind: str
     order: int
     description: str
-    run_segment: RunSegment
+    run_segment: RunSegment | None = None
     stiff: bool = False
     estimate_order: int | None = None
     tableau: tuple | None = None
@@ -68,16 +64,12 @@ class IntegratorSpec:
             raise ValueError(f"integrator {self.name!r}: the description must be one line")
 
 
-def segment_runner(name: str, kind: str, kernel, *, scaled: bool = False) -> RunSegment:
+def segment_runner(name: str, kind: str, kernel) -> RunSegment:
     """The contract's ``run_segment`` for ``kernel``: checks the arguments once per segment (not
     per step), then hands everything to the compiled kernel.
 
     kernel(y, t0, t1, setting, active, codes, params, mass, inertia, rot_only, t_out, y_out,
-    stats[, floors, max_steps]) -> (err, t_reached), compiled with numba. ``scaled`` kernels
-    measure errors per block and take ``floors`` (4,): the smallest scale of the r, v, q, ω
-    blocks, the optional sixth entry of program_arrays (zeros when absent), and ``max_steps``,
-    the optional seventh: they stop with status STATUS_STEP_LIMIT once stats[STEPS] reaches it
-    (their step counts are not known in advance: adaptive steps, implicit steps cut into pieces).
+    stats) -> (err, t_reached), compiled with numba.
     """
     what = "step" if kind == "fixed" else "rtol"
     fix = setting_ref("time.step") if kind == "fixed" else setting_ref("time.rtol")
@@ -91,13 +83,8 @@ def segment_runner(name: str, kind: str, kernel, *, scaled: bool = False) -> Run
             check_rtol(setting, f"integrator {name}")
         check_arrays(name, y, t0, t1, rot_only, t_out, y_out, stats)
         active, codes, params, mass, inertia = program_arrays[:5]
-        if not scaled:
-            return kernel(y, t0, t1, setting, active, codes, params, float(mass), inertia,
-                          rot_only, t_out, y_out, stats)
-        floors = program_arrays[5] if len(program_arrays) > 5 else np.zeros(4)
-        limit = int(program_arrays[6]) if len(program_arrays) > 6 else NO_STEP_LIMIT
         return kernel(y, t0, t1, setting, active, codes, params, float(mass), inertia,
-                      rot_only, t_out, y_out, stats, floors, limit)
+                      rot_only, t_out, y_out, stats)
 
     run_segment.__name__ = f"run_segment_{name}"
     run_segment.__doc__ = (f"Advance y in place from t0 to t1 with {name} ({kind}; setting = "

@@ -1,10 +1,10 @@
 """Which method a system runs with, its setting, and the run's error estimate.
 
-The methods are the registry's names with a systems kernel (`integrate`): dop853 (adaptive,
-rtol), rk4, midpoint and implicit (fixed step h). The error estimate is global, as for one body
-(`dynamics.accuracy`): companion runs at `accuracy.companion_settings` (rtol / 20; or 2h and
-4h with Richardson's rule, `accuracy.global_estimate`), compared in the contract's metric over
-all bodies (`outputs.distance`).
+The methods are the registry's time-stepping ones (`integrators.SYSTEM_METHODS`, `integrate`):
+dop853 (adaptive, rtol), rk4, midpoint and implicit (fixed step h). The error estimate is
+global, as for one body (`dynamics.accuracy`): companion runs at `accuracy.companion_settings`
+(rtol / 20; or 2h and 4h with Richardson's rule, `accuracy.global_estimate`), compared in the
+contract's metric over all bodies (`outputs.distance`).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from massprops.dynamics.accuracy import (
     rotation_floor,
 )
 from massprops.dynamics.budget import STEP_BUDGET
+from massprops.dynamics.integrators import INTEGRATORS, SYSTEM_METHODS
 from massprops.dynamics.integrators.base import check_rtol
 from massprops.dynamics.systems.integrate import integrate
 from massprops.dynamics.systems.model import WORLD
@@ -28,10 +29,10 @@ from massprops.dynamics.systems.stiffness import fastest_rate, unresolved_mode_e
 from massprops.dynamics.systems.system import System
 from massprops.parallel import CancellableJob
 
-SYSTEM_INTEGRATORS = ("auto", "dop853", "rk4", "midpoint", "implicit")
-"""What a system scene may name: the registry's methods with a systems kernel over [q, u]
-(`integrate`); auto picks one (`choose`). The splitting methods compose one free body's exact
-rotation and have no system form; the closed form is one body's."""
+SYSTEM_INTEGRATORS = ("auto", *SYSTEM_METHODS)
+"""What a system scene may name: the registry's time-stepping methods (`integrate`); auto picks
+one (`choose`). The splitting methods compose one free body's exact rotation and have no system
+form; the closed form is one body's."""
 
 REASONS = {"dop853": "adaptive 8th order", "rk4": "fixed step, 4th order",
            "midpoint": "fixed step, implicit midpoint (symplectic)",
@@ -73,18 +74,12 @@ def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
 
 def kind_of(name: str) -> str:
     """Method ``name``'s kind in the registry (``adaptive``, ``fixed``): which setting it takes."""
-    # deferred: the registry imports the one-body kernels' modules (their records only here)
-    from massprops.dynamics.integrators import INTEGRATORS
-
     return INTEGRATORS[name].kind
 
 
 def is_stiff(name: str) -> bool:
     """Method ``name`` is stable far beyond the explicit step limit (the registry's ``stiff``):
     its default step ignores the fast rates."""
-    # deferred: the registry imports the one-body kernels' modules (their records only here)
-    from massprops.dynamics.integrators import INTEGRATORS
-
     return INTEGRATORS[name].stiff
 
 
@@ -157,9 +152,6 @@ def start_companions(system: System, y0: np.ndarray, t_out: np.ndarray, name: st
                      limit: int) -> Companions | None:
     """The companion runs of a run of ``name`` at ``setting``, started (None: a method that
     needs none)."""
-    # deferred: the registry imports the one-body kernels' modules (their kinds only here)
-    from massprops.dynamics.integrators import INTEGRATORS
-
     settings = companion_settings(INTEGRATORS[name].kind, setting)
     if not settings:
         return None
@@ -187,9 +179,6 @@ def error_estimate(system: System, y0: np.ndarray, t_out: np.ndarray, name: str,
     method does to the rotations its steps take (`accuracy.rotation_floor`, `turn_per_step`):
     where those steps resolve nothing, the estimate is RESOLVES_NOTHING whatever the companions
     say (they can agree by chance there) or whether they ran."""
-    # deferred: the registry imports the one-body kernels' modules (their orders only here)
-    from massprops.dynamics.integrators import INTEGRATORS
-
     spec, size = INTEGRATORS[name], system.scene.size
     floor = rotation_floor(spec.tableau, turn_per_step(system, samples, steps), steps)
     if floor >= RESOLVES_NOTHING:

@@ -23,6 +23,7 @@ from massprops.dynamics.budget import (
 )
 from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
+from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.integrators.base import check_rtol, ignored_settings
 from massprops.dynamics.systems.assemble import build_tree, initial_coordinates, localized
 from massprops.dynamics.systems.falling import falling_frame
@@ -180,14 +181,6 @@ def _check_steps(scene: SystemScene, name: str, step: float, limit: int) -> None
     check_fixed_steps(name, scene.time.duration, step, len(_windows(scene)), scene.source, limit)
 
 
-def _spec(name: str):
-    """The registry's record of method ``name``."""
-    # deferred: the registry imports the one-body kernels' modules (the record only here)
-    from massprops.dynamics.integrators import INTEGRATORS
-
-    return INTEGRATORS[name]
-
-
 def _floors(system: System, duration: float) -> np.ndarray:
     """Smallest error scale per component: 1 rad (or the size for a length) for coordinates,
     those per duration for rates."""
@@ -245,7 +238,7 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     name, setting, reason = choose(system, y0, name, rtol, step)
     if kind_of(name) == "fixed":  # a default step too: the run bound, before the run
         _check_steps(scene, name, setting, limit)
-    ignored = ignored_settings(_spec(name), rtol, step)
+    ignored = ignored_settings(INTEGRATORS[name], rtol, step)
     if ignored is not None:
         notes.append(f"{scene.source}: {ignored}")
     t_out = sample_times(duration, every if every is not None else scene.output.every,
