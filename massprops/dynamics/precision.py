@@ -20,7 +20,7 @@ from massprops.dynamics.budget import sample_times
 from massprops.dynamics.compiled.compiling import SYSTEMS, prepare
 from massprops.dynamics.forces import ForceProgram
 from massprops.dynamics.frames import to_world
-from massprops.dynamics.integrators import SYSTEM_METHODS
+from massprops.dynamics.integrators import INTEGRATORS, SYSTEM_METHODS
 from massprops.dynamics.model import Scene
 from massprops.dynamics.program import compile_forces
 from massprops.dynamics.runner import run_once
@@ -113,9 +113,6 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
 
     notice(text) is called once if compiled kernels are missing from numba's cache and are being
     compiled (all of them are made ready first: massprops.dynamics.compiled.compiling.prepare)."""
-    # deferred: looking at every record imports the splitting methods' kernels
-    from massprops.dynamics.integrators import INTEGRATORS
-
     program = compile_forces(scene)
     names = applicable(scene, program, INTEGRATORS)
     if integrators:

@@ -45,7 +45,7 @@ from massprops.dynamics.forces import (
     ForceProgram,
 )
 from massprops.dynamics.frames import Trajectory, to_world
-from massprops.dynamics.integrators import SYSTEM_METHODS
+from massprops.dynamics.integrators import INTEGRATORS, SYSTEM_METHODS
 from massprops.dynamics.integrators.base import check_rtol, ignored_settings
 from massprops.dynamics.model import Scene
 from massprops.dynamics.program import compile_forces
@@ -137,9 +137,6 @@ def simulate(scene: Scene, *, integrator: str | None = None, rtol: float | None 
     Raises DivergenceError (exit 3) naming the time and the likely cause, RunBudgetError (exit 3)
     when the run bound refuses or stops the run (both carry what was computed).
     """
-    # deferred: the registry imports a method's module as it is looked up
-    from massprops.dynamics.integrators import INTEGRATORS
-
     program = compile_forces(scene)
     name = integrator or scene.time.integrator
     if name == "auto":
