@@ -433,3 +433,20 @@ def test_cli_an_interrupted_system_run_is_not_estimated(run, tmp_path, monkeypat
     res = run("simulate", "--json", SAMPLE_SCENES / "four_bar.yaml")
     (out,) = json_lines(res.stdout)
     assert out["interrupted"] is True and out["diagnostics"]["error_estimate"] is None
+
+
+@pytest.mark.parametrize("sample", ["disk.yaml", "double_pendulum.yaml"],
+                         ids=["one body", "system"])
+def test_a_written_run_without_an_interval_is_sampled_a_thousand_times(run, tmp_path, sample):
+    """No output.every and no --every, one body or a system alike: a written trajectory has
+    the run's 1000 equal intervals (`budget.sampling_interval`), t = k × duration / 1000."""
+    scene = Path(__file__).resolve().parent.parent / "sample_scenes" / sample
+    text = "\n".join(line for line in scene.read_text().splitlines()
+                     if not line.strip().startswith("every:"))
+    path = tmp_path / sample
+    path.write_text(text.replace("duration: 10.0", "duration: 0.5") + "\n")
+    res = run("simulate", path, "--output", tmp_path / "traj.csv", "--integrator", "rk4",
+              "--step", "1e-3", "-q")
+    assert res.exit_code == 0, res.stderr
+    t = np.loadtxt(tmp_path / "traj.csv", delimiter=",", skiprows=1)[:, 0]
+    np.testing.assert_allclose(t, 0.5 * np.arange(1001) / 1000, rtol=0, atol=1e-15)

@@ -110,6 +110,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
                 interrupted.append(True)
             return
         # deferred: the one-body run's modules, not a system's
+        from massprops.dynamics.budget import sampling_interval
         from massprops.dynamics.scene import load_scene
         from massprops.dynamics.simulate import simulate as run_scene
         from massprops.errors import DivergenceError, RunBudgetError
@@ -121,9 +122,8 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
             say_warning(scene.body_source, w)
         say_notes(scene.notes)  # already placed: "scene.yaml:LINE: ..."
         out = output_path or scene.output.file
-        sampling = every or scene.output.every
-        if sampling is None and (out or plot_path):
-            sampling = scene.time.duration / 1000
+        sampling = sampling_interval(scene.time.duration, every or scene.output.every,
+                                     bool(out or plot_path))
         protect = [scene_path, *scene.input_files]
         _check_run_outputs(out, plot_path, force, protect)  # now with the scene's files
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
@@ -261,6 +261,7 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
     xacro_args): run, write the trajectory, print JSON or a short summary; True when Ctrl-C
     stopped the run (what it computed is written and printed)."""
     # deferred, as the one-body path's imports: only a system scene needs them
+    from massprops.dynamics.budget import sampling_interval
     from massprops.dynamics.systems.robot_scene import load_any_system
     from massprops.dynamics.systems.run import simulate_system, write_system_trajectory
 
@@ -269,9 +270,8 @@ def _simulate_system(scene_path: str, as_json: bool, output_path: str | None,
         say_warning(scene_path, w)
     say_notes(scene.notes)  # already placed: "scene.yaml:LINE: ..."
     out = output_path or scene.output.file
-    sampling = every or scene.output.every
-    if sampling is None and (out or plot_path):
-        sampling = scene.time.duration / 1000
+    sampling = sampling_interval(scene.time.duration, every or scene.output.every,
+                                 bool(out or plot_path))
     progress = _Progress(enabled=not quiet and sys.stderr.isatty())
     protect = [scene_path, *scene.input_files]
     _check_run_outputs(out, plot_path, force, protect)  # now with the scene's files

@@ -144,6 +144,20 @@ DIAGNOSTIC_SAMPLES = 100
 cheap) so that drifts are maxima over the run and a divergence is located in time."""
 
 
+FILE_SAMPLES = 1000
+"""A run that writes a trajectory or a plot and is given no sampling interval is sampled at this
+many intervals."""
+
+
+def sampling_interval(duration: float, every: float | None, writes: bool) -> float | None:
+    """The sampling interval (s) of a run: ``every`` (the caller's, else the scene's) as given;
+    else duration / FILE_SAMPLES when the run ``writes`` a trajectory or a plot; else None (the
+    run's DIAGNOSTIC_SAMPLES only)."""
+    if every is None and writes:
+        return duration / FILE_SAMPLES
+    return every
+
+
 def sample_times(duration: float, every: float | None, source: str = "") -> np.ndarray:
     """Output times: k·every below the duration, and the duration itself (never accumulated).
     Raises RunBudgetError when there would be more than MAX_SAMPLES."""
