@@ -40,7 +40,7 @@ import numpy as np
 from _scenes import LONG_DRAG, SCENES
 
 from massprops.dynamics.accuracy import ADAPTIVE_TIGHTENING, Scales, state_error
-from massprops.dynamics.compiled.compiling import SYSTEMS, prepare
+from massprops.dynamics.compiled.compiling import SYSTEM_ENTRIES, prepare
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.precision import reference_run
@@ -128,10 +128,10 @@ def best_wall(run, rtol: float, repeat: int) -> float:
 
 
 def cold_compile_seconds() -> float:
-    """Warm-up of the systems kernel (every time-stepped method) in a fresh process with an
-    empty numba cache: a real compile (about two minutes)."""
-    code = ("from massprops.dynamics.compiled.compiling import SYSTEMS, prepare; "
-            "print(prepare([SYSTEMS]))")
+    """Warm-up of every systems entry (both step loops, the outputs, the right-hand side) in a
+    fresh process with an empty numba cache: a real compile (about a minute)."""
+    code = ("from massprops.dynamics.compiled.compiling import SYSTEM_ENTRIES, prepare; "
+            "print(prepare(SYSTEM_ENTRIES))")
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
         out = subprocess.run([sys.executable, "-c", code], env=env,
@@ -142,7 +142,7 @@ def cold_compile_seconds() -> float:
 def part_a(folder: Path, args) -> None:
     path = folder / "torqued100.yaml"
     path.write_text(SCENES["torqued"].text(duration=100.0), encoding="utf-8")
-    first = prepare([SYSTEMS])
+    first = prepare(SYSTEM_ENTRIES)
     problem = Problem(path)
     ref = problem.reference
     print(f"(a) in process: {SCENES['torqued'].title.replace('30 s', '100 s')}")

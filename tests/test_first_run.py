@@ -79,12 +79,14 @@ def test_the_compile_notice_is_one_stderr_line_on_a_cache_miss_only(tmp_path):
 
 
 def test_kernels_behind_integrator_names():
-    """The splitting methods share one kernel; every time-stepping method is the systems
-    engine's; the closed form has none."""
+    """The splitting methods share one kernel, and so do the fixed-step ones; DOP853 has its
+    own; the systems' other entries are named as themselves; the closed form has none."""
     assert compiling.compiled_names(["exact", "splitting6", "splitting", "dop853", "implicit"]) \
-        == ["splitting", compiling.SYSTEMS]
-    assert compiling.compiled_names(["rk4", "systems"]) == [compiling.SYSTEMS]
+        == ["splitting", "dop853", "fixed"]
+    assert compiling.compiled_names(["rk4", "midpoint", "outputs", "rhs"]) \
+        == ["fixed", "outputs", "rhs"]
     assert compiling.compiled_names(["exact"]) == []
+    assert set(compiling.SYSTEM_ENTRIES) <= set(compiling.COMPILE_SECONDS)
 
 
 def test_prepare_of_the_closed_form_does_nothing():

@@ -17,7 +17,7 @@ import numpy as np
 
 from massprops.dynamics.accuracy import Scales, exact_roundoff, global_estimate, state_error
 from massprops.dynamics.budget import sample_times
-from massprops.dynamics.compiled.compiling import SYSTEMS, prepare
+from massprops.dynamics.compiled.compiling import prepare
 from massprops.dynamics.forces import ForceProgram
 from massprops.dynamics.frames import to_world
 from massprops.dynamics.integrators import INTEGRATORS, SYSTEM_METHODS
@@ -123,10 +123,9 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
         names = [n for n in names if n in integrators]
     # the times every rung's `simulate(every=...)` samples, so that all compare at each
     t_out = sample_times(scene.time.duration, scene.time.duration / SAMPLES)
-    # the rungs' kernels and the reference's (a time-stepped method's: the systems kernel)
+    # the rungs' kernels and the reference's (a time-stepped method's: its systems entries)
     method = reference_method(scene, program, INTEGRATORS)
-    kernels = [n if n not in SYSTEM_METHODS else SYSTEMS for n in (*names, method)]
-    prepare(list(dict.fromkeys(kernels)), notice)
+    prepare(list(dict.fromkeys(k for n in (*names, method) for k in _kernels(n))), notice)
     truth, reference = reference_run(scene, program, INTEGRATORS, t_out)
     scales = Scales.of(scene.body.size, truth, scene.time.duration)
     plan = [(n, s) for n in names for s in ladder(INTEGRATORS[n], scene, program)]
@@ -184,6 +183,17 @@ def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out:
         how = "dop853 at rtol 1e-13 against rtol 1e-12 (tolerance proportionality)"
     return truth, {"kind": "run", "integrator": spec.name, "setting": fine,
                    "accuracy": accuracy, "checked": how}
+
+
+def _kernels(name: str) -> list[str]:
+    """The kernels (`compiling.prepare`'s names) a run of ``name`` uses: a time-stepped
+    method's systems entries (`systems.methods.kernels`), else its own."""
+    if name not in SYSTEM_METHODS:
+        return [name]
+    # deferred: the systems engine, loaded when a time-stepped run is asked for
+    from massprops.dynamics.systems.methods import kernels
+
+    return kernels(name)
 
 
 def _trajectory(scene, program, spec, setting, t_out):

@@ -234,12 +234,12 @@ def _as_system(scene: Scene, program: ForceProgram, spec, name: str, reason: str
     """``scene`` run with ``name`` at ``setting`` as the system of one body, its result in the
     one-body contract's terms; a failure carries its samples the same way (``partial``)."""
     # deferred: the systems engine, loaded when a run starts (as the registry is)
-    from massprops.dynamics.compiled.compiling import SYSTEMS
+    from massprops.dynamics.systems.methods import kernels
     from massprops.dynamics.systems.one_body import as_system
     from massprops.dynamics.systems.run import simulate_system
 
     start = time.perf_counter()
-    prepare([SYSTEMS], notice)
+    prepare(kernels(name), notice)
     warmup = time.perf_counter() - start
     fixed = spec.kind == "fixed"
     try:

@@ -33,18 +33,17 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-COMPILE_SECONDS = {"splitting": 10.0, "systems": 70.0}
-"""About how long (s, one idle core) compiling each kernel takes from an empty cache, from
-benchmarks/bench_first_run.py (the systems' kernel: 66 s of CPU, 77 s of wall time on a loaded
-machine, 2026-12-02); only for the notice's estimate and for sharing the work between two
-processes. The three splitting methods share one kernel."""
+SYSTEM_ENTRIES = ("dop853", "fixed", "outputs", "rhs")
+"""The systems engine's compiled entries (`systems_kernel.WARM_UPS`): the two step loops (the
+registry's ``kernel`` of each time-stepping method), the samples' outputs, and the right-hand
+side the stiffness probe differentiates. Each compiles and caches on its own."""
 
-SYSTEMS = "systems"
-"""The name of the systems' one kernel (`systems_kernel.run_segment`: every time-stepping
-method, `integrators.SYSTEM_METHODS`, for one body and many), prepared like a method's kernel."""
-
-SHARED_KERNEL = {"splitting4": "splitting", "splitting6": "splitting"}
-"""Methods whose compiled kernel is another's (compiling one compiles both)."""
+COMPILE_SECONDS = {"splitting": 10.0, "dop853": 30.0, "fixed": 30.0, "outputs": 25.0,
+                   "rhs": 20.0}
+"""About how long (s, one idle core) compiling each kernel takes in a fresh process from an
+empty cache (benchmarks/bench_first_run.py; docs/performance.md, "Compiling"); a second systems
+entry in the same process costs less, the code they share being compiled already. Only for the
+notice's estimate and for sharing the work between two processes."""
 
 HELPER_TIMEOUT_S = 600.0
 """The longest the caller waits for the helper process before compiling the rest itself."""
@@ -65,18 +64,21 @@ def whole_process(alone: bool = True) -> None:
 
 
 def compiled_names(names: Sequence[str]) -> list[str]:
-    """The distinct compiled kernels behind ``names`` (integrator names, or SYSTEMS), in order:
-    a time-stepping method's is the systems kernel; the closed form has none; methods sharing a
-    kernel name it once."""
+    """The distinct compiled kernels behind ``names`` (integrator names, or kernel names such as
+    `SYSTEM_ENTRIES`), in order: an integrator's is its registry ``kernel`` (a registered one
+    without: its own name); the closed form has none; kernels shared by several methods are
+    named once."""
     # deferred: the registry imports the kernels' modules; needed only when preparing them
-    from massprops.dynamics.integrators import INTEGRATORS, SYSTEM_METHODS
+    from massprops.dynamics.integrators import INTEGRATORS
 
     out: list[str] = []
     for name in names:
-        if name != SYSTEMS and INTEGRATORS[name].kind == "exact":
-            continue
-        kernel = SYSTEMS if name in SYSTEM_METHODS else SHARED_KERNEL.get(name, name)
-        if kernel not in out:
+        if name in SYSTEM_ENTRIES:
+            kernel: str | None = name
+        else:
+            spec = INTEGRATORS[name]
+            kernel = spec.kernel or (None if spec.kind == "exact" else name)
+        if kernel is not None and kernel not in out:
             out.append(kernel)
     return out
 
@@ -130,11 +132,11 @@ def prepare(names: Sequence[str], notice: Callable[[str], None] | None = None) -
 def warm_up(name: str) -> None:
     """Run integrator ``name`` for one tiny step on a stand-in problem whose arguments have the
     types of every real run (so the call loads or compiles the very kernel the runs use)."""
-    if name == SYSTEMS:
+    if name in SYSTEM_ENTRIES:
         # deferred: the systems' kernels, needed only when preparing them
-        from massprops.dynamics.compiled.systems_kernel import warm_up as warm_up_systems
+        from massprops.dynamics.compiled.systems_kernel import WARM_UPS
 
-        warm_up_systems()
+        WARM_UPS[name]()
         return
     # deferred: the registry imports the kernels' modules; needed only when preparing them
     from massprops.dynamics.forces import GRAVITY, NPAR
@@ -260,15 +262,15 @@ def helper_main(kernels: list[str]) -> None:
 
 def ready_side_by_side(names: Sequence[str] | None = None, jobs: int = 2,
                        timeout: float = 1800.0, env: dict | None = None) -> int:
-    """Load or compile the kernels of the integrators ``names`` (default: every one, the systems'
-    kernel among them) into the cache, in ``jobs`` fresh processes side by side (one kernel is
+    """Load or compile the kernels of the integrators ``names`` (default: every one, and every
+    systems entry) into the cache, in ``jobs`` fresh processes side by side (one kernel is
     one process's work); returns the number of functions numba compiled (0: all were cached).
     The build step and the test suite's start use it; a run uses `prepare`.
     Raises RuntimeError when a process fails or takes longer than ``timeout`` seconds."""
     # deferred: the registry imports the kernels' modules; needed only when preparing them
     from massprops.dynamics.integrators import INTEGRATORS
 
-    kernels = compiled_names(names or [*INTEGRATORS, SYSTEMS])
+    kernels = compiled_names(names or [*INTEGRATORS, *SYSTEM_ENTRIES])
     procs = [subprocess.Popen(_helper_command(share), env=env, stdin=subprocess.DEVNULL,
                               stdout=subprocess.PIPE, text=True)
              for share in balanced(kernels, jobs) if share]

@@ -1,5 +1,5 @@
 """DOP853 over a system's y = [q, u], compiled: the whole step loop of one segment, called by
-the systems' one compiled entry (`systems_kernel.run_segment`).
+its compiled entry (`systems_kernel.step_dop853`).
 
 The method of `dynamics.systems.integrate` (the project's tableau, dop853.f's error norm and step
 control): after each accepted step what every method does (`systems_step.settle`: the end
@@ -76,7 +76,7 @@ def scratch(n):
 @array_inner
 def segment(prog, ws, scratch, arrays, t0, t1, rtol, max_steps, owners):
     """Integrate arrays' y (in place) from t0 to t1 at ``rtol``, samples at
-    t_out[istats[4]:] into y_out (`systems_kernel.run_segment` gives the arguments; the arrays
+    t_out[istats[4]:] into y_out (`systems_kernel.step_dop853` gives the arguments; the arrays
     are views numba does not reference-count, `unowned`)."""
     y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail = arrays
     k, ytmp, ynew, cont, moved = scratch

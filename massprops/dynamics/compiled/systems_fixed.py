@@ -1,5 +1,5 @@
 """The registry's fixed-step methods over a system's y = [q, u], compiled: the step loop of one
-segment, called by the systems' one compiled entry (`systems_kernel.run_segment`).
+segment, called by its compiled entry (`systems_kernel.step_fixed`).
 
 The registry's methods (`dynamics.integrators.stepped`: ``rk4``, order 4; ``midpoint``, the
 implicit midpoint rule, order 2, symplectic; ``implicit``, 3-stage Radau IIA, order 5, L-stable)
@@ -53,7 +53,7 @@ from massprops.dynamics.integrators._shared import EPS, step_count, worst
 from massprops.dynamics.integrators.stepped import RADAU_A as _RADAU_ROWS
 
 RK4, MIDPOINT, RADAU = 0, 1, 2
-"""Method codes of `segment` (and of `systems_kernel.run_segment`)."""
+"""Method codes of `segment` (and of `systems_kernel.step_fixed`)."""
 
 METHODS = {"rk4": RK4, "midpoint": MIDPOINT, "implicit": RADAU}
 """Registry names -> method codes."""
@@ -111,7 +111,7 @@ def segment(prog, ws, scratch, arrays, t0, t1, h_req, method, max_steps, owners)
     """Integrate arrays' y (in place) from t0 to t1 in equal steps of at most h_req with
     ``method``, samples at t_out[istats[4]:] into y_out; arrays' ``scales`` (n,) are the Newton
     norm's: each component's floor and running max |y_i| (updated here, as DOP853's). The
-    arguments come from `systems_kernel.run_segment` (views numba does not reference-count)."""
+    arguments come from `systems_kernel.step_fixed` (views numba does not reference-count)."""
     y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail = arrays
     k, fa, fb, ya, ynew, jac, big, piv, z, dz, moved, ytmp, ftmp, mode = scratch
     n = y.size

@@ -1,12 +1,13 @@
-"""The one compiled entry of a system's run: `run_segment`, one call per segment, with any of
-the systems' methods (DOP853, `systems_dop853`; rk4, midpoint, implicit, `systems_fixed`), and
-one call for all the samples' outputs (`systems_outputs`).
+"""The compiled entries of a system's run, each compiled and cached on its own so that a run
+compiles (or loads) only what it uses: `step_dop853` (one segment of DOP853, `systems_dop853`),
+`step_fixed` (one segment of rk4, midpoint or Radau IIA, `systems_fixed`), `evaluate_samples`
+(every sample's outputs, `systems_outputs`), and `systems_step.rhs` (one right-hand side, for
+the stiffness probe's Jacobian). `KERNELS` names them for `compiled.compiling`.
 
-One kernel, not one per method: every method calls the same right-hand side and projection,
-which numba compiles (~1 min) into each kernel that calls them; a single entry compiles them
-once, for the wheel's prebuilt kernels and for a machine without them alike. The outputs use the
-same accelerations, kinematics and loads: as a method code of this entry they cost only their
-own code to compile.
+They share the right-hand side, kinematics and loads (`systems_step`, `systems_loops`, ...):
+numba compiles those once per process and links a copy into each entry, so the second entry a
+process compiles costs its own code and the link, not the shared code again; a fresh process
+(the first run's helper on the second core, `compiling`) compiles the shared code anew.
 """
 
 from __future__ import annotations
@@ -18,21 +19,15 @@ from massprops.dynamics.compiled.jit import array_kernel
 from massprops.dynamics.compiled.systems_step import OK, rhs, workspace
 from massprops.dynamics.compiled.unowned import unowned
 
-DOP853 = 3
-"""The method code of DOP853 (the fixed-step ones: `systems_fixed.METHODS`)."""
-
-METHODS = {"dop853": DOP853, **systems_fixed.METHODS}
-"""Registry names -> method codes of `run_segment`."""
+METHODS = {"dop853": -1, **systems_fixed.METHODS}
+"""Registry names -> the method codes the step entries take (dop853's is unread)."""
 
 
 @array_kernel
-def run_segment(prog, y, t0, t1, setting, method, scales, t_out, y_out, istats, fstats, acc_b,
-                acc_u, max_steps, yfail, out):
-    """Integrate y (in place) from t0 to t1 with ``method`` (a METHODS code) at ``setting``
-    (DOP853: rtol; the others: the step h, s); samples at t_out[istats[4]:] into y_out.
-    With a `systems_outputs` code (STATES, ENERGIES, OUTPUTS) instead: no step, each sample
-    y_out[s] at t_out[s] evaluated into out[s] (its layout there; a failure in istats); the
-    other arguments are unread.
+def step_dop853(prog, y, t0, t1, rtol, method, scales, t_out, y_out, istats, fstats, acc_b,
+                acc_u, max_steps, yfail):
+    """Integrate y (in place) from t0 to t1 with DOP853 at ``rtol``; samples at
+    t_out[istats[4]:] into y_out (``method`` is unread: the step entries take one signature).
 
     prog: the system program (`dynamics.systems.program`); scales (n,): each component's error
     scale floor, grown to its running max |y_i| here; istats, fstats, acc_b, acc_u, yfail: see
@@ -40,25 +35,42 @@ def run_segment(prog, y, t0, t1, setting, method, scales, t_out, y_out, istats, 
     take views numba does not reference-count (`unowned`) and, last, the owned arrays: an
     argument stays alive until the call returns."""
     ws = workspace(prog)
-    if method >= systems_outputs.STATES:
-        systems_outputs.evaluate(prog, ws, systems_outputs.scratch(prog), t_out, y_out, out,
-                                 istats, method)
-        return
     arrays = (y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail)
-    if method == DOP853:
-        own = systems_dop853.scratch(y.size)
-        systems_dop853.segment(unowned(prog), unowned(ws), unowned(own), unowned(arrays), t0, t1,
-                               setting, max_steps, (prog, ws, own, arrays))
-    else:
-        fixed = systems_fixed.scratch(y.size, method)
-        systems_fixed.segment(unowned(prog), unowned(ws), unowned(fixed), unowned(arrays), t0,
-                              t1, setting, method, max_steps, (prog, ws, fixed, arrays))
+    own = systems_dop853.scratch(y.size)
+    systems_dop853.segment(unowned(prog), unowned(ws), unowned(own), unowned(arrays), t0, t1,
+                           rtol, max_steps, (prog, ws, own, arrays))
+
+
+@array_kernel
+def step_fixed(prog, y, t0, t1, h, method, scales, t_out, y_out, istats, fstats, acc_b, acc_u,
+               max_steps, yfail):
+    """`step_dop853` with the fixed-step ``method`` (a `systems_fixed.METHODS` code) in equal
+    steps of at most ``h`` (s); scales (n,) are its Newton norm's."""
+    ws = workspace(prog)
+    arrays = (y, scales, t_out, y_out, istats, fstats, acc_b, acc_u, yfail)
+    fixed = systems_fixed.scratch(y.size, method)
+    systems_fixed.segment(unowned(prog), unowned(ws), unowned(fixed), unowned(arrays), t0, t1,
+                          h, method, max_steps, (prog, ws, fixed, arrays))
+
+
+@array_kernel
+def evaluate_samples(prog, t_out, y_out, out, istats, mode):
+    """Each sample y_out[s] at t_out[s] evaluated into out[s] by ``mode`` (`systems_outputs`'s
+    STATES, ENERGIES, OUTPUTS: its layout there); a failure in istats[3:5]."""
+    ws = workspace(prog)
+    systems_outputs.evaluate(prog, ws, systems_outputs.scratch(prog), t_out, y_out, out, istats,
+                             mode)
+
+
+STEPS = {"dop853": step_dop853, "rk4": step_fixed, "midpoint": step_fixed,
+         "implicit": step_fixed}
+"""Registry names -> the entry that steps them."""
 
 
 def stand_in() -> tuple:
     """The program of a stand-in system (a rod on a hinge, no loops) whose arrays have the types
-    of every real program (`dynamics.systems.program`): warming the kernel up on it loads or
-    compiles the very kernel real runs use."""
+    of every real program (`dynamics.systems.program`): warming an entry up on it loads or
+    compiles the very code real runs use."""
     ints = np.int64
     return (np.array([1, 1, 0, 1, 1], ints), np.array([[1, -1, 0, 0, 0, 1, 1, 0]], ints),
             np.array([[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]]), np.zeros((1, 3)),
@@ -73,12 +85,27 @@ def stand_in() -> tuple:
             np.zeros((1, 2), ints), np.array([[0.0, 0.0, 0.5]]))
 
 
-def warm_up() -> None:
-    """Run one short segment of the `stand_in` system and one right-hand side from Python
-    (`systems_step.rhs`, the stiffness probe's): loads or compiles both."""
+def _warm_step(entry, method: int) -> None:
     y, prog = np.array([0.1, 0.0]), stand_in()
-    rhs(prog, workspace(prog), 0.0, y, np.zeros(2), -1)
-    run_segment(prog, y, 0.0, 1e-3, 1e-6, DOP853, np.ones(2), np.array([0.0, 1e-3]),
-                np.zeros((2, 2)), np.array([0, 0, 0, OK, 1, -1, -1], np.int64),
-                np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]), np.zeros((0, 1)),
-                np.zeros((0, 1)), 1000, np.zeros(2), np.zeros((0, 0)))
+    entry(prog, y, 0.0, 1e-3, 1e-3 if entry is step_fixed else 1e-6, method, np.ones(2),
+          np.array([0.0, 1e-3]), np.zeros((2, 2)), np.array([0, 0, 0, OK, 1, -1, -1], np.int64),
+          np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]), np.zeros((0, 1)), np.zeros((0, 1)),
+          1000, np.zeros(2))
+
+
+def _warm_outputs() -> None:
+    prog = stand_in()
+    evaluate_samples(prog, np.zeros(1), np.array([[0.1, 0.0]]), np.zeros((1, 1)),
+                     np.array([0, 0, 0, OK, 0, -1, -1], np.int64), systems_outputs.ENERGIES)
+
+
+def _warm_rhs() -> None:
+    prog = stand_in()
+    rhs(prog, workspace(prog), 0.0, np.array([0.1, 0.0]), np.zeros(2), -1)
+
+
+WARM_UPS = {"dop853": lambda: _warm_step(step_dop853, METHODS["dop853"]),
+            "fixed": lambda: _warm_step(step_fixed, METHODS["rk4"]),
+            "outputs": _warm_outputs, "rhs": _warm_rhs}
+"""The systems' compiled entries by name (`compiling`'s kernel names): each runs its entry once
+on the `stand_in` system, which loads or compiles it (and what it calls)."""

@@ -1,8 +1,6 @@
 """What a system run reports at its samples, compiled: body poses and motions, the scene joints'
 reactions and points, the loops' residuals, the energy, for every sample of a run in one call of
-the systems' one compiled entry (`systems_kernel.run_segment` with a method code of this module),
-so that it reuses the right-hand side, kinematics and loads compiled into that entry: a second
-entry calling them would compile them all again (~2 min from an empty cache).
+its own compiled entry (`systems_kernel.evaluate_samples` with a mode of this module).
 
 The numbers of the numpy path (`dynamics.systems.outputs.reference`, `System.energy`), which
 stays as the independent reference of the tests; its module doc gives the reactions' rule.
@@ -37,7 +35,7 @@ from massprops.dynamics.compiled.systems_tree import (
 from massprops.dynamics.compiled.unowned import at, by_ref
 
 STATES, ENERGIES, OUTPUTS = 10, 11, 12
-"""Method codes of `systems_kernel.run_segment` that evaluate samples instead of stepping."""
+"""The modes of `systems_kernel.evaluate_samples` (the module doc says what each writes)."""
 
 BODY_COLUMNS, JOINT_COLUMNS, RESIDUAL_COLUMNS = 18, 9, 2
 """Columns of a sample's row per body, per scene joint, and the residuals' (module doc)."""
@@ -60,7 +58,7 @@ def evaluate(prog, ws, own, t_out, y_out, out, istats, mode):
     """Each sample y_out[s] (at t_out[s]) evaluated into out[s] (module doc) by ``mode``. The
     tuples come as the caller owns them (alive for the call) and go on by reference
     (`unowned.by_ref`): taking them as `unowned` views with their owners too, as the step
-    loops do, cost `run_segment` ~2 s more to compile (its views and the owners' tuple)."""
+    loops do, cost the entry ~2 s more to compile (its views and the owners' tuple)."""
     pp, wp, op = by_ref(prog), by_ref(ws), by_ref(own)
     nq = at(pp, 0)[0]
     udot = own[0]

@@ -6,7 +6,7 @@ function that calls another keeps an increment and a decrement for every array i
 of 21 arrays and a workspace of ~40 down through a dozen calls per right-hand side: measured,
 that bookkeeping took ~90 % of an evaluation (1.3 µs of a 2-body `applied` that computes for
 15 ns). A view with no meminfo makes each count a null test. The caller must keep the owned
-arrays alive while the views are used (pass them along, as `systems_kernel.run_segment` does).
+arrays alive while the views are used (pass them along, as `systems_kernel`'s step entries do).
 
 `by_ref` and `at`: a tuple passed by pointer. numba passes a tuple argument as one machine
 argument per field of every array in it (~600 for the program and workspace); a call that is not

@@ -41,6 +41,8 @@ class IntegratorSpec:
     stiff : stable far beyond the explicit step limit (~2.8 / ForceProgram.stiffest_rate).
     estimate_order : the highest order the error estimate's Richardson rule may assume (None:
         ``order``); lower where the order can fall on stiff problems (order reduction).
+    kernel : the name of its compiled kernel (`compiled.compiling`; methods that share one name
+        it alike and compile it once); None for a closed form, which compiles nothing.
     tableau : (A, b), the Butcher tableau of one step as nested tuples (A (s, s), b (s,)), whose
         stability function R(z) = 1 + z bᵀ (I − z A)⁻¹ 1 tells what a step does to a rotation
         (`accuracy.rotation_floor`); None for a method that is no single Runge-Kutta step (the
@@ -55,6 +57,7 @@ class IntegratorSpec:
     stiff: bool = False
     estimate_order: int | None = None
     tableau: tuple | None = None
+    kernel: str | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:

@@ -221,7 +221,7 @@ def _entry(name: str, gammas: tuple[float, ...], order: int):
 
 def _spec(name: str, gammas: tuple[float, ...], order: int, what: str) -> IntegratorSpec:
     return IntegratorSpec(
-        name=name, kind="fixed", order=order,
+        name=name, kind="fixed", order=order, kernel="splitting",
         description=f"{what}: exact free-rotation drift + force kicks, fixed step (time.step)",
         run_segment=segment_runner(name, "fixed", _entry(name, gammas, order)))
 

@@ -31,19 +31,19 @@ RK4_TABLEAU = (((0.0, 0.0, 0.0, 0.0), (0.5, 0.0, 0.0, 0.0), (0.0, 0.5, 0.0, 0.0)
 
 SPECS = (
     IntegratorSpec(
-        name="dop853", kind="adaptive", order=8,
+        name="dop853", kind="adaptive", order=8, kernel="dop853",
         description="Dormand-Prince 8(5,3), adaptive step (time.rtol), 7th-order dense output",
         tableau=(tuple(map(tuple, DOP853_A[:12, :12].tolist())), tuple(DOP853_B.tolist()))),
     IntegratorSpec(
-        name="rk4", kind="fixed", order=4,
+        name="rk4", kind="fixed", order=4, kernel="fixed",
         description="classical Runge-Kutta 4, fixed step (time.step)", tableau=RK4_TABLEAU),
     IntegratorSpec(
-        name="midpoint", kind="fixed", order=2, stiff=True,
+        name="midpoint", kind="fixed", order=2, stiff=True, kernel="fixed",
         description="implicit midpoint, fixed step (time.step): symplectic, keeps quadratic "
                     "invariants",
         tableau=(((0.5,),), (1.0,))),
     IntegratorSpec(
-        name="implicit", kind="fixed", order=5, stiff=True,
+        name="implicit", kind="fixed", order=5, stiff=True, kernel="fixed",
         description="Radau IIA order 5, fixed step (time.step), L-stable: for stiff "
                     "springs/dampers",
         tableau=(RADAU_A, RADAU_A[2]),

@@ -1,19 +1,16 @@
 """The integrators of systems, with a projection after every step: DOP853 with its 7th-order
 dense output (`dynamics.compiled.systems_dop853`), and the registry's fixed-step methods rk4,
 midpoint and implicit (`dynamics.compiled.systems_fixed`, Hermite dense output): one compiled
-call per segment (`dynamics.compiled.systems_kernel.run_segment`) over the system's arrays
-(`program`).
+call per segment (the method's entry, `dynamics.compiled.systems_kernel.STEPS`) over the
+system's arrays (`program`).
 
-The registry's kernels cannot take a system (see DESIGN.md, "Systems of bodies"): they are
-compiled around the one-body state y = [r, v, q, ω] (13 or 7 entries, a quaternion at a fixed
-offset, error blocks by that layout) and call ``forces.rhs`` with the force table. These are
-the same methods (DOP853: the project's own tableau, dop853.f's error norm and step control;
-the fixed-step ones: the same stages and Newton rule) over y = [q, u] of any length: after each
-accepted step the quaternion coordinates are renormalised
-and (q, u) projected onto Φ = 0, Φ̇ = 0 (the compiled form of System.project); the dense output
-of a step is built from its start and its projected end, and each sample is projected in turn.
-The error scale of component i is rtol × max(running max |y_i|, floor_i). A failure in the
-kernel comes back as a status code; here it becomes the exception the run reports.
+DOP853 is the project's own tableau with dop853.f's error norm and step control; the fixed-step
+methods share its stages' right-hand side and the Newton rule. Each works on y = [q, u] of any
+length: after each accepted step the quaternion coordinates are renormalised and (q, u)
+projected onto Φ = 0, Φ̇ = 0 (the compiled form of System.project); the dense output of a step
+is built from its start and its projected end, and each sample is projected in turn. The error
+scale of component i is rtol × max(running max |y_i|, floor_i). A failure in the kernel comes
+back as a status code; here it becomes the exception the run reports.
 """
 
 from __future__ import annotations
@@ -27,7 +24,7 @@ from massprops import tolerances
 from massprops.dynamics import budget
 from massprops.dynamics.compiled import systems_step as codes
 from massprops.dynamics.compiled.systems_fixed import DIVERGED, MAX_PIECES
-from massprops.dynamics.compiled.systems_kernel import DOP853, METHODS, run_segment
+from massprops.dynamics.compiled.systems_kernel import METHODS, STEPS, step_dop853
 from massprops.dynamics.compiled.systems_step import PROJECT_ITERATIONS
 from massprops.dynamics.integrators._shared import STEP_UNDERFLOW, step_count
 from massprops.dynamics.systems.system import SingularPose, spectral_radius
@@ -63,9 +60,6 @@ hands control back: between calls Ctrl-C and the progress bar are served. Calls 
 counts, never by timers, so results do not depend on the machine. A call stopped there goes on
 from its last accepted state: DOP853 with a fresh first step (two evaluations per call), the
 fixed-step methods on the same grid."""
-
-NO_OUT = np.zeros((0, 0))
-"""`run_segment`'s outputs array, unread by a step loop (`outputs` evaluates samples)."""
 
 
 class Run:
@@ -139,8 +133,8 @@ def _segments(system, y, edges, setting, method, scales, floors, t_out, run, ist
         start = t0
         while True:
             bound = min(max_steps, int(istats[0] + istats[2]) + CALL_STEPS)
-            run_segment(system.program, y, start, t1, h, METHODS[method], within, t_out,
-                        run.y_out, istats, fstats, accepted_b, accepted_u, bound, yfail, NO_OUT)
+            STEPS[method](system.program, y, start, t1, h, METHODS[method], within, t_out,
+                          run.y_out, istats, fstats, accepted_b, accepted_u, bound, yfail)
             if istats[3] != codes.STEP_LIMIT or bound >= max_steps:
                 break
             istats[3] = codes.OK  # this call's share, not the run bound: go on from there
@@ -183,9 +177,9 @@ def _short_error(system, y_start, y_end, t0, t1, h, method, scales, accepted_b, 
     halves fail)."""
     y = y_start.copy()
     istats, fstats, _, _ = _run_arrays(system, 0)
-    run_segment(system.program, y, t0, t1, 0.5 * h, METHODS[method], scales.copy(),
-                np.empty(0), np.empty((0, y.size)), istats, fstats, accepted_b.copy(),
-                accepted_u.copy(), max_steps, np.zeros(y.size), NO_OUT)
+    STEPS[method](system.program, y, t0, t1, 0.5 * h, METHODS[method], scales.copy(),
+                  np.empty(0), np.empty((0, y.size)), istats, fstats, accepted_b.copy(),
+                  accepted_u.copy(), max_steps, np.zeros(y.size))
     if istats[3] != codes.OK:
         return np.inf
     return 2.0 * float(np.abs(y - y_end).max())
@@ -217,9 +211,10 @@ def _narrow(system, y: np.ndarray, low: float, high: float, rtol: float, scales:
         scales_k = np.maximum(np.maximum(np.abs(trial), floors), scales)
         edges = np.linspace(low, high, NARROW_PIECES + 1)
         for a, b in zip(edges[:-1], edges[1:]):
-            run_segment(system.program, trial, float(a), float(b), min(float(rtol), NARROW_RTOL),
-                        DOP853, scales_k.copy(), np.empty(0), np.empty((0, n)), istats, fstats,
-                        accepted_b, accepted_u, NARROW_STEPS, np.zeros(n), NO_OUT)
+            step_dop853(system.program, trial, float(a), float(b),
+                        min(float(rtol), NARROW_RTOL), METHODS["dop853"], scales_k.copy(),
+                        np.empty(0), np.empty((0, n)), istats, fstats, accepted_b, accepted_u,
+                        NARROW_STEPS, np.zeros(n))
             if istats[3] != codes.OK:
                 break
         if istats[3] != codes.CROSSED:

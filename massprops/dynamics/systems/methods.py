@@ -72,6 +72,20 @@ def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
     return name, float(h), reason or REASONS[name]
 
 
+def kernels(name: str, scene=None) -> list[str]:
+    """The compiled entries (`compiling.SYSTEM_ENTRIES`) a run of ``name`` (SYSTEM_INTEGRATORS)
+    uses, to be made ready before it starts: the method's step loop and the samples' outputs;
+    the right-hand side wherever the stiffness probe runs (`auto` on a sprung ``scene``; a fixed
+    step: its default step and its estimate's credit); and DOP853 where the estimate's
+    unresolved-mode probe runs (a stiff method). Only a failure's diagnosis may use more (the
+    probe, DOP853 narrowing a singular pose): compiled then, on first use."""
+    if name == "auto":
+        return ["dop853", "outputs", *(["rhs"] if scene is not None and _sprung(scene) else [])]
+    spec = INTEGRATORS[name]
+    return [spec.kernel, "outputs", *(["rhs"] if spec.kind == "fixed" else []),
+            *(["dop853"] if spec.stiff else [])]
+
+
 def kind_of(name: str) -> str:
     """Method ``name``'s kind in the registry (``adaptive``, ``fixed``): which setting it takes."""
     return INTEGRATORS[name].kind

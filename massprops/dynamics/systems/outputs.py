@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from massprops.dynamics.compiled.systems_kernel import run_segment
+from massprops.dynamics.compiled.systems_kernel import evaluate_samples
 from massprops.dynamics.compiled.systems_loops import OK
 from massprops.dynamics.compiled.systems_outputs import ENERGIES, OUTPUTS, STATES
 from massprops.dynamics.systems import cutjoint
@@ -98,8 +98,7 @@ def _compiled(system, t: np.ndarray, y: np.ndarray, mode: int, width: int) -> np
     if not len(t):
         return out
     istats = np.array([0, 0, 0, OK, 0, -1, -1], dtype=np.int64)
-    run_segment(system.program, np.zeros(0), 0.0, 0.0, 0.0, mode, np.zeros(0), t, y, istats,
-                np.zeros(7), np.zeros((0, 0)), np.zeros((0, 0)), 0, np.zeros(0), out)
+    evaluate_samples(system.program, t, y, out, istats, mode)
     if istats[3] != OK:  # M is positive definite at any finite state of a valid scene
         at = float(t[istats[4]])
         raise ComputationError(f"{system.scene.source}: the outputs at t = {at:.6g} s cannot "

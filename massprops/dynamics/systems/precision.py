@@ -14,7 +14,6 @@ import math
 from collections.abc import Callable, Sequence
 
 from massprops.dynamics.accuracy import global_estimate
-from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
 from massprops.dynamics.precision import (
     AT_REFERENCE,
@@ -29,6 +28,7 @@ from massprops.dynamics.systems.methods import (
     choose,
     default_step,
     is_stiff,
+    kernels,
 )
 from massprops.dynamics.systems.model import SystemScene
 from massprops.dynamics.systems.outputs import distance
@@ -80,7 +80,10 @@ def precision_system(scene: SystemScene, integrators: Sequence[str] | None = Non
         names = [n for n in names if n in integrators]
     every = scene.time.duration / SAMPLES
     system, y0, _ = prepare(scene)
-    prepare_kernels([SYSTEMS], notice)  # before `reference_run`'s stiffness probe uses them
+    # every rung's kernels and the reference's choice (its stiffness probe), at once: one
+    # notice, and a helper compiles some on the second core
+    prepare_kernels(list(dict.fromkeys(k for n in (*names, "auto")
+                                       for k in kernels(n, scene))), notice)
     ref, reference = reference_run(scene, every, (system, y0), notice)
     plan = [(n, s) for n in names for s in ladder(scene, n, (system, y0))]
     runs: list[PrecisionRun] = []

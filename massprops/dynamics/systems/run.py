@@ -21,7 +21,6 @@ from massprops.dynamics.budget import (
     sample_times,
     too_fast,
 )
-from massprops.dynamics.compiled.compiling import SYSTEMS
 from massprops.dynamics.compiled.compiling import prepare as prepare_kernels
 from massprops.dynamics.integrators import INTEGRATORS
 from massprops.dynamics.integrators.base import check_rtol, ignored_settings
@@ -33,6 +32,7 @@ from massprops.dynamics.systems.methods import (
     SYSTEM_INTEGRATORS,
     choose,
     error_estimate,
+    kernels,
     kind_of,
     start_companions,
 )
@@ -233,9 +233,10 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
     if name == "dop853":  # the same (`methods.choose` checks what auto picks)
         check_rtol(float(rtol if rtol is not None else scene.time.rtol), scene.source)
     # compiled or loaded before the timed run (and before `choose`, whose stiffness probe
-    # evaluates the compiled right-hand side)
-    prepare_kernels([SYSTEMS], notice)
+    # evaluates the compiled right-hand side); what `auto` picks, once it has picked
+    prepare_kernels(kernels(name, scene), notice)
     name, setting, reason = choose(system, y0, name, rtol, step)
+    prepare_kernels(kernels(name), notice)
     if kind_of(name) == "fixed":  # a default step too: the run bound, before the run
         _check_steps(scene, name, setting, limit)
     ignored = ignored_settings(INTEGRATORS[name], rtol, step)
