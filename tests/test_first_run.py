@@ -25,7 +25,7 @@ STEPPED_SCENE = ("body: {mass: 1, inertia: [[1, 0, 0], [0, 2, 0], [0, 0, 3]]}\n"
                  "forces: [{type: torque, vector: [0, 0.1, 0]}]\n"
                  "time: {duration: 0.5, integrator: splitting, step: 1.0e-3}\n")
 """A one-body scene on a one-body kernel that compiles in seconds (the splitting methods'; the
-time-stepping methods run as a system of one body, whose kernel takes minutes)."""
+time-stepping methods run as a system of one body, whose entries take half a minute)."""
 
 CLI = """
 import json, sys
@@ -195,3 +195,37 @@ def test_building_the_same_sources_again_loads_the_kernels_from_the_builders_cac
                              capture_output=True, text=True, timeout=240)
         counts.append(int(out.stdout.split()[-1]))
     assert counts[0] > 0 and counts[1] == 0
+
+
+COUNT_COMPILES = """
+from numba.core import event
+compiled = []
+class Listener(event.Listener):
+    def on_start(self, ev):
+        compiled.append(ev)
+    def on_end(self, ev):
+        pass
+event.register("numba:compile", Listener())
+from massprops.dynamics.integrators._subflows import drift_work
+drift_work()
+print(len(compiled))
+"""
+
+
+def test_a_kernel_built_for_the_portable_cpu_loads_on_this_one(tmp_path):
+    """The wheel's kernels are built for a generic CPU of this architecture (`build` sets
+    NUMBA_CPU_NAME to `cache.PORTABLE_CPU`): a process on this CPU, which numba alone would
+    have compile its own, loads them and compiles nothing."""
+    from massprops.dynamics.compiled import build, cache
+
+    def compiles(settings: dict) -> int:
+        env = {k: v for k, v in os.environ.items()
+               if k not in ("NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES")}
+        env.update(NUMBA_CACHE_DIR=str(tmp_path), **settings)
+        out = subprocess.run([sys.executable, "-c", COUNT_COMPILES], cwd=ROOT, env=env,
+                             capture_output=True, text=True, timeout=120, check=True)
+        return int(out.stdout.split()[-1])
+
+    assert build.PORTABLE_ENV["NUMBA_CPU_NAME"] == cache.PORTABLE_CPU
+    assert compiles(build.PORTABLE_ENV) > 0  # the build's process: compiled, generic
+    assert compiles({}) == 0  # this CPU's process: loaded

@@ -56,6 +56,13 @@ UNUSED_CACHE_DAYS = 30
 """A cache folder of other sources (an older version, another checkout) not used for this many
 days is removed when a new one is made: each holds ~8 MB, and every upgrade makes one."""
 
+PORTABLE_CPU = "generic"
+"""The CPU name of portable kernels (numba's NUMBA_CPU_NAME, with no CPU features): the wheel's
+prebuilt kernels are compiled for it (`build`), so that they load on any CPU of the
+architecture they were built on. Measured, they run as fast as this CPU's own: the kernels are
+scalar loops that the CPU's vector extensions do not speed up (docs/performance.md,
+"Compiling")."""
+
 PACKAGE = DYNAMICS.parent
 """The `massprops` package: a kernel's files are named by its source's folder relative to it."""
 
@@ -165,6 +172,18 @@ class KernelCache(FunctionCache):
     def load_overload(self, sig, target_context):
         self._settle()
         return super().load_overload(sig, target_context)
+
+    def _load_overload(self, sig, target_context):
+        """This CPU's own entry, else the portable one (`PORTABLE_CPU`) for the same sources,
+        signature and architecture: code for a generic CPU of this architecture runs on every
+        CPU of it."""
+        data = super()._load_overload(sig, target_context)
+        if data is None and self._enabled:
+            sig_key, (triple, _, _), code = self._index_key(sig, target_context.codegen())
+            data = self._cache_file.load((sig_key, (triple, PORTABLE_CPU, ""), code))
+            if data is not None:
+                data = self._impl.rebuild(target_context, data)
+        return data
 
     def save_overload(self, sig, data):
         self._settle()

@@ -10,10 +10,12 @@ cache folder of this package, when its hash is the one they were built for (the 
 Python, numba and numpy).
 
 Validity is numba's, not ours: numba uses a cached entry only when its index matches the numba
-version, the source file's content hash, the function's bytecode and this CPU (target triple,
-CPU name and features). A wheel built on another machine leaves entries numba does not use, and
+version, the source file's content hash, the function's bytecode and the CPU (target triple,
+CPU name and features). The build compiles for a generic CPU of its architecture, which the
+kernels' cache accepts on any CPU of it (`cache.PORTABLE_CPU`): a wheel built on another x86-64
+machine loads here. One built for another architecture leaves entries that are not used, and
 the first run compiles as it would have (with its notice). The manifest only avoids copying
-files numba would ignore.
+files for other sources or versions.
 """
 
 from __future__ import annotations
