@@ -182,3 +182,46 @@ def test_accelerations_on_made_kinematics_are_the_same_numbers(scene):
         full = tr.kinematics(system.tree, q, u, udot).A
         assert np.array_equal(tr.with_accelerations(system.tree, tr.kinematics(system.tree, q, u),
                                                     udot).A, full)
+
+
+def test_program_and_workspace_hold_what_their_slot_names_say():
+    """Each named slot (`compiled.systems_layout`) holds the array its name stands for, checked
+    against the numpy System: the program's bodies, joints, sizes and tolerances, and every
+    workspace slot's shape (the workspace is built in order, so a slot out of place shows)."""
+    from massprops import tolerances
+    from massprops.dynamics.compiled import systems_layout as L
+    from massprops.dynamics.compiled.systems_tree import INERTIA_SIZE
+
+    system, _, _ = prepare(parse_system(EVERY_KIND, source="e.yaml", base_dir=SAMPLES))
+    prog, tree = system.program, system.tree
+    assert len(prog) == L.PROGRAM_SLOTS
+    nq, nv, m, n, nj = (int(prog[L.P_DIMS][k]) for k in
+                        (L.D_NQ, L.D_NV, L.D_M, L.D_BODIES, L.D_JOINTS))
+    assert (nq, nv, m, n, nj) == (tree.nq, tree.nv, system.m, len(tree.bodies), len(tree.joints))
+    assert m > 0 and nq > nv  # a loop, and quaternions: every size tells
+    assert prog[L.P_MASS].tolist() == [b.mass for b in tree.bodies]
+    assert np.array_equal(prog[L.P_COM0], [b.com0 for b in tree.bodies])
+    assert prog[L.P_JOINTS][:, 2].tolist() == [j.child for j in tree.joints]
+    assert prog[L.P_TOLERANCES][L.T_RANK_RTOL] == tolerances.CONSTRAINT_RANK_RTOL
+    assert prog[L.P_TOLERANCES][L.T_SINGULAR_MARGIN] == tolerances.NEAR_SINGULAR_MARGIN
+    assert prog[L.P_LOADED].tolist() == list(tree.loaded)
+    assert prog[L.P_SCENE_JOINTS].shape == (len(system.scene.joints), 2)
+    p, kk, i6 = max(m, nv), min(m, nv), INERTIA_SIZE
+    shapes = {
+        "W_ROT": (n, 3, 3), "W_COM": (n, 3), "W_VEL": (n, 6), "W_ACC": (n, 6),
+        "W_INERTIA": (n, i6), "W_MOTION": (6, nv), "W_JOINT_POINTS": (nj, 3), "W_BIAS": (n, 6),
+        "W_M3": (4, 3, 3), "W_V3": (16, 3), "W_M6": (6, 6), "W_LOADS": (n, 6), "W_TAU": (nv,),
+        "W_ART_INERTIA": (n, 6, 6), "W_ART_BIAS": (n, 6), "W_ABA_U": (nv,),
+        "W_ABA_DINV": (nj, 6, 6), "W_ABA_UMAT": (nj, 6, 6), "W_M6_PAIR": (2, 6, 6),
+        "W_PHI": (m,), "W_GDOT": (m,), "W_ROW_B": (m, 6), "W_ROW_A": (m, 6), "W_G": (m, nv),
+        "W_MASS": (nv, nv), "W_CHOL": (nv, nv), "W_B": (m, nv), "W_QR": (p, p),
+        "W_SVD_WORK": (p, p), "W_SINGULAR": (p,), "W_KEEP": (1 + p,), "W_SVD_U": (m, kk),
+        "W_SVD_V": (nv, kk), "W_COLUMN": (nv,), "W_Q": (0,), "W_H": (nv,), "W_ROWS": (m,),
+        "W_DELTA": (nq,), "W_ORDER": (1 + p,), "W_REFLECTORS": (p,), "W_COMPOSITE": (n, i6),
+        "W_Z": (kk, kk), "W_REFERENCE": (3,)}
+    names = {k: v for k, v in vars(L).items() if k.startswith("W_")}
+    assert set(names) == set(shapes) and sorted(names.values()) == list(range(L.WORKSPACE_SLOTS))
+    ws = workspace(prog)
+    assert len(ws) == L.WORKSPACE_SLOTS
+    assert {k: ws[names[k]].shape for k in shapes} == shapes
+    assert ws[L.W_KEEP].dtype == ws[L.W_ORDER].dtype == np.int64

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from massprops.dynamics.compiled import systems_dop853, systems_fixed, systems_outputs
+from massprops.dynamics.compiled import systems_layout as L
 from massprops.dynamics.compiled.jit import array_kernel
 from massprops.dynamics.compiled.systems_step import OK, rhs, workspace
 from massprops.dynamics.compiled.unowned import unowned
@@ -71,18 +72,24 @@ def stand_in() -> tuple:
     """The program of a stand-in system (a rod on a hinge, no loops) whose arrays have the types
     of every real program (`dynamics.systems.program`): warming an entry up on it loads or
     compiles the very code real runs use."""
-    ints = np.int64
-    return (np.array([1, 1, 0, 1, 1], ints), np.array([[1, -1, 0, 0, 0, 1, 1, 0]], ints),
-            np.array([[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]]), np.zeros((1, 3)),
-            np.array([[0.0, 0.0, 0.5]]), np.eye(3).reshape(1, 3, 3), np.zeros(1, ints),
-            np.ones(1), np.eye(3).reshape(1, 3, 3), np.eye(3).reshape(1, 3, 3),
-            np.array([[0.0, 0.0, -0.5]]), np.array([[0.0, 0.0, -9.81]]), np.zeros((0, 5), ints),
-            np.zeros((0, 13)), np.zeros((0, 4), ints), np.zeros((0, 8)), np.zeros((0, 2), ints),
-            np.zeros((0, 9)), np.zeros(0, ints), np.zeros((0, 6)),
-            np.array([1.0, 1e-8, 1e-14, 1e-6]), np.zeros((0, 3), ints), np.zeros((0, 21)),
-            np.zeros((0, 3), ints), np.zeros((0, 2)),
-            np.array([[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]]), np.eye(3).reshape(1, 3, 3),
-            np.zeros((1, 2), ints), np.array([[0.0, 0.0, 0.5]]))
+    ints, hinge, eye = np.int64, np.array([[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]]), np.eye(3)[None]
+    slots = {
+        L.P_DIMS: np.array([1, 1, 0, 1, 1], ints),  # nq, nv, m, bodies, joints (`L.D_*`)
+        L.P_JOINTS: np.array([[1, -1, 0, 0, 0, 1, 1, 0]], ints), L.P_AXES: hinge,
+        L.P_S_PARENT: np.zeros((1, 3)), L.P_S_CHILD: np.array([[0.0, 0.0, 0.5]]),
+        L.P_ROT_PARENT0: eye, L.P_PARENT_JOINT: np.zeros(1, ints), L.P_MASS: np.ones(1),
+        L.P_INERTIA: eye, L.P_ROTATION0: eye, L.P_COM0: np.array([[0.0, 0.0, -0.5]]),
+        L.P_WEIGHT: np.array([[0.0, 0.0, -9.81]]), L.P_PRIMS: np.zeros((0, 5), ints),
+        L.P_PRIM_VALUES: np.zeros((0, 13)), L.P_FORCES: np.zeros((0, 4), ints),
+        L.P_FORCE_VALUES: np.zeros((0, 8)), L.P_SPRINGS: np.zeros((0, 2), ints),
+        L.P_SPRING_VALUES: np.zeros((0, 9)), L.P_LOADED: np.zeros(0, ints),
+        L.P_LOADED_VALUES: np.zeros((0, 6)), L.P_TOLERANCES: np.array([1.0, 1e-8, 1e-14, 1e-6]),
+        L.P_CUT_LOADS: np.zeros((0, 3), ints), L.P_CUT_LOAD_VALUES: np.zeros((0, 21)),
+        L.P_COUPLINGS: np.zeros((0, 3), ints), L.P_COUPLING_VALUES: np.zeros((0, 2)),
+        L.P_AXES_PARENT: hinge, L.P_TURN0: eye, L.P_SCENE_JOINTS: np.zeros((1, 2), ints),
+        L.P_SCENE_POINTS: np.array([[0.0, 0.0, 0.5]]),
+    }
+    return tuple(np.ascontiguousarray(slots[k]) for k in range(L.PROGRAM_SLOTS))
 
 
 def _warm_step(entry, method: int) -> None:

@@ -9,6 +9,25 @@ from __future__ import annotations
 import math
 
 from massprops.dynamics.compiled.jit import array_inner, inlined
+from massprops.dynamics.compiled.systems_layout import (
+    P_CUT_LOAD_VALUES,
+    P_CUT_LOADS,
+    P_FORCE_VALUES,
+    P_FORCES,
+    P_JOINTS,
+    P_LOADED,
+    P_LOADED_VALUES,
+    P_SPRING_VALUES,
+    P_SPRINGS,
+    P_WEIGHT,
+    W_COM,
+    W_LOADS,
+    W_REFERENCE,
+    W_ROT,
+    W_TAU,
+    W_V3,
+    W_VEL,
+)
 from massprops.dynamics.compiled.systems_tree import cross_into
 from massprops.dynamics.compiled.unowned import at
 
@@ -16,11 +35,13 @@ from massprops.dynamics.compiled.unowned import at
 @array_inner
 def applied(pp, t, q, u, wp):
     """fext (n, 6) spatial forces about O on each body and τ (nv,) joint loads (System.applied)."""
-    ji, bweight = at(pp, 1), at(pp, 11)
-    fi, ff, si, sf, li, lf = at(pp, 14), at(pp, 15), at(pp, 16), at(pp, 17), at(pp, 18), at(pp, 19)
-    rot, com, vel, fext, tau = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 11), at(wp, 12)
-    ref = at(wp, 43)
-    v3 = at(wp, 9)
+    ji, bweight = at(pp, P_JOINTS), at(pp, P_WEIGHT)
+    fi, ff, si = at(pp, P_FORCES), at(pp, P_FORCE_VALUES), at(pp, P_SPRINGS)
+    sf, li, lf = at(pp, P_SPRING_VALUES), at(pp, P_LOADED), at(pp, P_LOADED_VALUES)
+    rot, com, vel, fext = at(wp, W_ROT), at(wp, W_COM), at(wp, W_VEL), at(wp, W_LOADS)
+    tau = at(wp, W_TAU)
+    ref = at(wp, W_REFERENCE)
+    v3 = at(wp, W_V3)
     vec, x, xa, xb = v3[0], v3[1], v3[2], v3[3]
     va, vb, dd, force = v3[4], v3[5], v3[6], v3[7]
     for i in range(com.shape[0]):
@@ -88,7 +109,7 @@ def applied(pp, t, q, u, wp):
         if lf[n, 4] <= t < lf[n, 5]:
             load += lf[n, 3]
         tau[ji[k, 4]] += sign * load
-    _cut_loads(at(pp, 21), at(pp, 22), t, rot, com, vel, ref, fext, v3)
+    _cut_loads(at(pp, P_CUT_LOADS), at(pp, P_CUT_LOAD_VALUES), t, rot, com, vel, ref, fext, v3)
 
 
 @array_inner

@@ -14,6 +14,45 @@ start's at an evaluated state).
 from __future__ import annotations
 
 from massprops.dynamics.compiled.jit import array_inner, inlined
+from massprops.dynamics.compiled.systems_layout import (
+    P_COUPLING_VALUES,
+    P_COUPLINGS,
+    P_JOINTS,
+    P_PARENT_JOINT,
+    P_PRIM_VALUES,
+    P_PRIMS,
+    P_TOLERANCES,
+    T_RANK_RTOL,
+    T_SIZE,
+    W_ACC,
+    W_B,
+    W_CHOL,
+    W_COLUMN,
+    W_COM,
+    W_G,
+    W_GDOT,
+    W_H,
+    W_KEEP,
+    W_MASS,
+    W_MOTION,
+    W_ORDER,
+    W_PHI,
+    W_Q,
+    W_QR,
+    W_REFERENCE,
+    W_REFLECTORS,
+    W_ROT,
+    W_ROW_A,
+    W_ROW_B,
+    W_SINGULAR,
+    W_SVD_U,
+    W_SVD_V,
+    W_SVD_WORK,
+    W_TAU,
+    W_V3,
+    W_VEL,
+    W_Z,
+)
 from massprops.dynamics.compiled.systems_linalg import (
     apply_q,
     cholesky,
@@ -92,11 +131,14 @@ def _dir(rot, vel, acc, body, local, out, i):
 def terms(pp, wp):
     """Φ (m,), Φ̈ at u̇ = 0 (m,), G (m, nv) into the workspace (with ρ_b and ρ_a (m, 6) of
     the line and distance rows); the couplings' rows last (from the coordinates
-    `systems_tree.kinematics` keeps in ws[34])."""
-    pi, pf, size, pjoint, ji = at(pp, 12), at(pp, 13), at(pp, 20)[0], at(pp, 6), at(pp, 1)
-    phi, gdot, rb, ra, g, s = at(wp, 19), at(wp, 20), at(wp, 21), at(wp, 22), at(wp, 23), at(wp, 5)
-    rot, com, vel, acc, ref = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3), at(wp, 43)
-    v = at(wp, 9)
+    `systems_tree.kinematics` keeps in `W_Q`)."""
+    pi, pf, size = at(pp, P_PRIMS), at(pp, P_PRIM_VALUES), at(pp, P_TOLERANCES)[T_SIZE]
+    pjoint, ji = at(pp, P_PARENT_JOINT), at(pp, P_JOINTS)
+    phi, gdot, rb, ra = at(wp, W_PHI), at(wp, W_GDOT), at(wp, W_ROW_B), at(wp, W_ROW_A)
+    g, s = at(wp, W_G), at(wp, W_MOTION)
+    rot, com, vel, acc = at(wp, W_ROT), at(wp, W_COM), at(wp, W_VEL), at(wp, W_ACC)
+    ref = at(wp, W_REFERENCE)
+    v = at(wp, W_V3)
     xa, xb, t, e = v[0], v[3], v[6], v[7]
     d, dd, ddd, w1, w2, w3, w4, w5 = v[8], v[9], v[10], v[11], v[12], v[13], v[14], v[15]
     for n in range(pi.shape[0]):
@@ -173,7 +215,7 @@ def terms(pp, wp):
                 gdot[row] = x / length
                 _rho_row(g, row, ji, pjoint, s, b, rb)
                 _rho_row(g, row, ji, pjoint, s, a, ra)
-    ct, cv, qc = at(pp, 23), at(pp, 24), at(wp, 34)
+    ct, cv, qc = at(pp, P_COUPLINGS), at(pp, P_COUPLING_VALUES), at(wp, W_Q)
     for k in range(ct.shape[0]):  # the couplings' rows (`dynamics.systems.loops.Coupling`)
         row = ct[k, 0]
         if k == 0 or ct[k - 1, 0] != row:
@@ -233,11 +275,12 @@ def _rho(out, row, x, e, sign):
 
 @array_inner
 def factor(pp, wp):
-    """After `kinematics`: M, its Cholesky factor L, the constraint terms, B = G L⁻ᵀ (ws[26])
-    and the pivoted QR of Bᵀ (`systems_linalg.pivoted_qr`: Bᵀ P = Q R in ws[27], the order and
-    rank in ws[39], the reflectors' factors in ws[40]); False if M is not positive definite."""
-    mass, low, g, bm, x = at(wp, 24), at(wp, 25), at(wp, 23), at(wp, 26), at(wp, 27)
-    row = at(wp, 33)
+    """After `kinematics`: M, its Cholesky factor L, the constraint terms, B = G L⁻ᵀ (`W_B`)
+    and the pivoted QR of Bᵀ (`systems_linalg.pivoted_qr`: Bᵀ P = Q R in `W_QR`, the order and
+    rank in `W_ORDER`, the reflectors' factors in `W_REFLECTORS`); False if M is not positive
+    definite."""
+    mass, low, g, bm, x = at(wp, W_MASS), at(wp, W_CHOL), at(wp, W_G), at(wp, W_B), at(wp, W_QR)
+    row = at(wp, W_COLUMN)
     nv, m = mass.shape[0], g.shape[0]
     crba(pp, wp, mass)
     if not cholesky(mass, low, nv):
@@ -249,7 +292,7 @@ def factor(pp, wp):
         lower_solve(low, row, nv)
         for c in range(nv):
             bm[i, c] = x[c, i] = row[c]
-    pivoted_qr(x, nv, m, at(wp, 39), at(wp, 40), at(pp, 20)[1])
+    pivoted_qr(x, nv, m, at(wp, W_ORDER), at(wp, W_REFLECTORS), at(pp, P_TOLERANCES)[T_RANK_RTOL])
     return True
 
 
@@ -260,10 +303,11 @@ def decompose(pp, wp):
     rank tolerance): B = P Rᵀ Qᵀ ≈ P W Q₁ᵀ, W = R[:r]ᵀ (m × r), Q₁ Q's first r columns, and
     W's one-sided Jacobi SVD W Z = U_w Σ gives B's U = P U_w and V = Q₁ Z. A Jacobi SVD of B
     itself (5 sweeps over 3 column pairs on the four-bar) cost ~3× as much at every accepted
-    step. ws U (m, kk), σ (kk,), V (nv, kk), kk = min(m, nv), columns r and on zero; ws[30] =
+    step. ws U (m, kk), σ (kk,), V (nv, kk), kk = min(m, nv), columns r and on zero; `W_KEEP` =
     [count kept, kept flags] (σ_j above CONSTRAINT_RANK_RTOL of the largest)."""
-    bm, x, w, sv, uo, vo = at(wp, 26), at(wp, 27), at(wp, 28), at(wp, 29), at(wp, 31), at(wp, 32)
-    order, tau, z, col = at(wp, 39), at(wp, 40), at(wp, 42), at(wp, 33)
+    bm, x, w, sv = at(wp, W_B), at(wp, W_QR), at(wp, W_SVD_WORK), at(wp, W_SINGULAR)
+    uo, vo = at(wp, W_SVD_U), at(wp, W_SVD_V)
+    order, tau, z, col = at(wp, W_ORDER), at(wp, W_REFLECTORS), at(wp, W_Z), at(wp, W_COLUMN)
     nv, m = bm.shape[1], bm.shape[0]
     kk, r = min(m, nv), order[0]
     for j in range(m):  # W = R[:r]ᵀ: R on and above x's diagonal (reflectors below it)
@@ -283,9 +327,9 @@ def decompose(pp, wp):
     top = 0.0
     for j in range(kk):
         top = max(top, sv[j])
-    rank_rtol = at(pp, 20)[1]
+    rank_rtol = at(pp, P_TOLERANCES)[T_RANK_RTOL]
     kept = 0
-    keep = at(wp, 30)
+    keep = at(wp, W_KEEP)
     for j in range(kk):
         keep[1 + j] = 1 if sv[j] > rank_rtol * top else 0
         kept += keep[1 + j]
@@ -298,7 +342,7 @@ def min_norm(pp, wp, residual, out):
     rows s of `factor`'s pivoted QR (Bᵀ_s = Q₁ R₁₁: z = Q₁ R₁₁⁻ᵀ residual_s): the smallest
     correction in the kinetic-energy metric with G out = residual on those rows, and on the
     others too where the residual is consistent (the redundant rows are their combinations)."""
-    low, x, order, tau = at(wp, 25), at(wp, 27), at(wp, 39), at(wp, 40)
+    low, x, order, tau = at(wp, W_CHOL), at(wp, W_QR), at(wp, W_ORDER), at(wp, W_REFLECTORS)
     nv = low.shape[0]
     for i in range(nv):
         out[i] = 0.0
@@ -333,11 +377,11 @@ def accelerations(pp, wp, t, q, u, udot, rank0, posed):
     else:
         kinematics(pp, q, u, wp)
     applied(pp, t, q, u, wp)
-    g = at(wp, 23)
+    g = at(wp, W_G)
     if g.shape[0] == 0:
         return OK if aba(pp, wp, udot) else LINALG
-    h, tau, low, gdot = at(wp, 35), at(wp, 12), at(wp, 25), at(wp, 20)
-    x, order, rt = at(wp, 27), at(wp, 39), at(wp, 40)
+    h, tau, low, gdot = at(wp, W_H), at(wp, W_TAU), at(wp, W_CHOL), at(wp, W_GDOT)
+    x, order, rt = at(wp, W_QR), at(wp, W_ORDER), at(wp, W_REFLECTORS)
     nv = h.shape[0]
     bias(pp, wp, h)
     if posed:

@@ -14,6 +14,25 @@ directly (`_floating_root`).
 from __future__ import annotations
 
 from massprops.dynamics.compiled.jit import array_inner, inlined
+from massprops.dynamics.compiled.systems_layout import (
+    P_JOINTS,
+    P_PARENT_JOINT,
+    W_ABA_DINV,
+    W_ABA_U,
+    W_ABA_UMAT,
+    W_ACC,
+    W_ART_BIAS,
+    W_ART_INERTIA,
+    W_BIAS,
+    W_COMPOSITE,
+    W_INERTIA,
+    W_LOADS,
+    W_M6,
+    W_M6_PAIR,
+    W_MOTION,
+    W_TAU,
+    W_VEL,
+)
 from massprops.dynamics.compiled.systems_linalg import cholesky, lower_solve, upper_solve
 from massprops.dynamics.compiled.systems_tree import (
     FREE,
@@ -40,14 +59,16 @@ def _net(vel, inert, fext, i, out):
 @array_inner
 def aba(pp, wp, udot):
     """udot (nv,) = M⁻¹ (τ − h) of a tree without loops."""
-    ji = at(pp, 1)
-    acc, inert, s, cb, tau = at(wp, 3), at(wp, 4), at(wp, 5), at(wp, 7), at(wp, 12)
-    ia, pa, uu, dinv, un = at(wp, 13), at(wp, 14), at(wp, 15), at(wp, 16), at(wp, 17)
-    v6, m6 = at(wp, 10), at(wp, 18)
+    ji = at(pp, P_JOINTS)
+    acc, inert, s, cb = at(wp, W_ACC), at(wp, W_INERTIA), at(wp, W_MOTION), at(wp, W_BIAS)
+    tau = at(wp, W_TAU)
+    ia, pa, uu = at(wp, W_ART_INERTIA), at(wp, W_ART_BIAS), at(wp, W_ABA_U)
+    dinv, un = at(wp, W_ABA_DINV), at(wp, W_ABA_UMAT)
+    v6, m6 = at(wp, W_M6), at(wp, W_M6_PAIR)
     n = inert.shape[0]
     for i in range(n):
         spatial_matrix(inert[i], ia[i])
-        _net(at(wp, 2), inert, at(wp, 11), i, pa[i])
+        _net(at(wp, W_VEL), inert, at(wp, W_LOADS), i, pa[i])
     low, tmp = m6[0], m6[1]
     for k in range(ji.shape[0] - 1, -1, -1):
         par, ch, iu, nvj = ji[k, 1], ji[k, 2], ji[k, 4], ji[k, 6]
@@ -169,10 +190,10 @@ def _floating_root(ia, pa, s, tau, iu, low, f, acc, cb, udot):
 def bias(pp, wp, h):
     """h (nv,) = Sᵀ of the transmitted forces I A₀ + V ×f I V − f_ext summed over each
     subtree (RNEA at u̇ = 0); uses the kinematics' A (u̇ = 0)."""
-    ji = at(pp, 1)
-    acc, inert, s, pa = at(wp, 3), at(wp, 4), at(wp, 5), at(wp, 14)
+    ji = at(pp, P_JOINTS)
+    acc, inert, s, pa = at(wp, W_ACC), at(wp, W_INERTIA), at(wp, W_MOTION), at(wp, W_ART_BIAS)
     for i in range(inert.shape[0]):
-        _net(at(wp, 2), inert, at(wp, 11), i, pa[i])
+        _net(at(wp, W_VEL), inert, at(wp, W_LOADS), i, pa[i])
         f = spatial_times(inert[i], acc[i, 0], acc[i, 1], acc[i, 2], acc[i, 3], acc[i, 4],
                           acc[i, 5])
         for r in range(6):
@@ -196,8 +217,8 @@ def crba(pp, wp, mass):
     """mass (nv, nv) = the joint-space mass matrix (composite rigid bodies, each composite as
     the ten numbers of `systems_tree.INERTIA_SIZE`: sums of masses, first moments and inertias
     about O are the composite's)."""
-    ji, pjoint = at(pp, 1), at(pp, 6)
-    inert, s, comp, v6 = at(wp, 4), at(wp, 5), at(wp, 41), at(wp, 10)
+    ji, pjoint = at(pp, P_JOINTS), at(pp, P_PARENT_JOINT)
+    inert, s, comp, v6 = at(wp, W_INERTIA), at(wp, W_MOTION), at(wp, W_COMPOSITE), at(wp, W_M6)
     for i in range(inert.shape[0]):
         for r in range(INERTIA_SIZE):
             comp[i, r] = inert[i, r]

@@ -23,6 +23,51 @@ import math
 import numpy as np
 
 from massprops.dynamics.compiled.jit import array_inner, inlined
+from massprops.dynamics.compiled.systems_layout import (
+    D_BODIES,
+    D_M,
+    D_NQ,
+    D_NV,
+    P_COUPLING_VALUES,
+    P_COUPLINGS,
+    P_CUT_LOAD_VALUES,
+    P_CUT_LOADS,
+    P_DIMS,
+    P_JOINTS,
+    P_LOADED,
+    P_LOADED_VALUES,
+    P_PRIM_VALUES,
+    P_PRIMS,
+    P_SCENE_JOINTS,
+    P_SCENE_POINTS,
+    P_SPRING_VALUES,
+    P_SPRINGS,
+    P_TOLERANCES,
+    P_WEIGHT,
+    T_SIZE,
+    W_ACC,
+    W_B,
+    W_BIAS,
+    W_CHOL,
+    W_COM,
+    W_G,
+    W_GDOT,
+    W_H,
+    W_INERTIA,
+    W_JOINT_POINTS,
+    W_KEEP,
+    W_LOADS,
+    W_MOTION,
+    W_PHI,
+    W_REFERENCE,
+    W_ROT,
+    W_ROW_A,
+    W_ROW_B,
+    W_SINGULAR,
+    W_SVD_U,
+    W_TAU,
+    W_VEL,
+)
 from massprops.dynamics.compiled.systems_linalg import lower_solve
 from massprops.dynamics.compiled.systems_loops import OK, accelerations, decompose, turned
 from massprops.dynamics.compiled.systems_mass import _net
@@ -41,16 +86,20 @@ BODY_COLUMNS, JOINT_COLUMNS, RESIDUAL_COLUMNS = 18, 9, 2
 """Columns of a sample's row per body, per scene joint, and the residuals' (module doc)."""
 
 
+O_UDOT, O_NET, O_CUT, O_LAMBDA, O_R, O_VECTOR, O_PAIR = range(7)
+"""The slots of `evaluate`'s own arrays (`scratch`): u̇ (nv,), the bodies' net forces (n, 6),
+the cut joints' reactions by scene joint (J, 6), λ (m,), r (m,), a vector of max(nv, m), one
+cut row's forces on b and on a (2, 6)."""
+
+
 @inlined
 def scratch(prog):
-    """`evaluate`'s own arrays: u̇ (nv), the bodies' net forces (n, 6), the cut joints'
-    reactions by scene joint (J, 6), λ (m), r (m), a vector of max(nv, m), one cut row's
-    forces on b and on a (2, 6). Positions are measured from the kinematics' reference point
-    (workspace slot 43, `tree.reference_point`)."""
-    dims = prog[0]
-    nv, m, n = dims[1], dims[2], dims[3]
-    return (np.zeros(nv), np.zeros((n, 6)), np.zeros((prog[27].shape[0], 6)), np.zeros(m),
-            np.zeros(m), np.zeros(max(nv, m)), np.zeros((2, 6)))
+    """`evaluate`'s own arrays, in the order of the ``O_*`` slots. Positions are measured from
+    the kinematics' reference point (`systems_layout.W_REFERENCE`)."""
+    dims = prog[P_DIMS]
+    nv, m, n = dims[D_NV], dims[D_M], dims[D_BODIES]
+    return (np.zeros(nv), np.zeros((n, 6)), np.zeros((prog[P_SCENE_JOINTS].shape[0], 6)),
+            np.zeros(m), np.zeros(m), np.zeros(max(nv, m)), np.zeros((2, 6)))
 
 
 @array_inner
@@ -60,8 +109,8 @@ def evaluate(prog, ws, own, t_out, y_out, out, istats, mode):
     (`unowned.by_ref`): taking them as `unowned` views with their owners too, as the step
     loops do, cost the entry ~2 s more to compile (its views and the owners' tuple)."""
     pp, wp, op = by_ref(prog), by_ref(ws), by_ref(own)
-    nq = at(pp, 0)[0]
-    udot = own[0]
+    nq = at(pp, P_DIMS)[D_NQ]
+    udot = own[O_UDOT]
     for s in range(y_out.shape[0]):
         y, row = y_out[s], out[s]
         q, u = y[:nq], y[nq:]
@@ -73,9 +122,9 @@ def evaluate(prog, ws, own, t_out, y_out, out, istats, mode):
         else:
             kinematics(pp, q, u, wp)
         if mode == ENERGIES:
-            row[0] = _energy(pp, wp, q, at(wp, 43))
+            row[0] = _energy(pp, wp, q, at(wp, W_REFERENCE))
             continue
-        _bodies(wp, row, at(wp, 43))
+        _bodies(wp, row, at(wp, W_REFERENCE))
         if mode == OUTPUTS:
             _reactions(pp, wp, op, u, row)
 
@@ -85,7 +134,7 @@ def _bodies(wp, row, ref):
     """A sample's body columns: the centre of mass (from the system frame's origin), R, ω and
     the centre's velocity, formed about the reference point the kinematics measure from (no
     cancellation however far the floating base went)."""
-    rot, com, vel = at(wp, 0), at(wp, 1), at(wp, 2)
+    rot, com, vel = at(wp, W_ROT), at(wp, W_COM), at(wp, W_VEL)
     for i in range(com.shape[0]):
         o = BODY_COLUMNS * i
         for c in range(3):
@@ -122,8 +171,8 @@ def _point(rot, com, ref, body, local):
 def _multipliers(pp, wp, lam, r, z):
     """λ (m,) of least norm (module doc) after `accelerations` with loops (the workspace holds
     τ, h, L, B, Φ̈₀ and the pivoted QR there)."""
-    tau, h, low, bm, gdot = at(wp, 12), at(wp, 35), at(wp, 25), at(wp, 26), at(wp, 20)
-    uo, sv, keep = at(wp, 31), at(wp, 29), at(wp, 30)
+    tau, h, low, bm, gdot = at(wp, W_TAU), at(wp, W_H), at(wp, W_CHOL), at(wp, W_B), at(wp, W_GDOT)
+    uo, sv, keep = at(wp, W_SVD_U), at(wp, W_SINGULAR), at(wp, W_KEEP)
     m, nv = bm.shape[0], bm.shape[1]
     decompose(pp, wp)
     for i in range(nv):
@@ -149,14 +198,18 @@ def _multipliers(pp, wp, lam, r, z):
 def _reactions(pp, wp, op, u, row):
     """The scene joints' reactions and points, the residuals (at the rates u), into ``row``
     (module doc; the rule of `dynamics.systems.outputs`); op: `scratch` by reference."""
-    ji, pi, pf, sj, sp = at(pp, 1), at(pp, 12), at(pp, 13), at(pp, 27), at(pp, 28)
-    ct, cv = at(pp, 23), at(pp, 24)
-    rot, com, vel, acc, inert = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 3), at(wp, 4)
-    s, pts, cb, fext, tau = at(wp, 5), at(wp, 6), at(wp, 7), at(wp, 11), at(wp, 12)
-    phi, g, rb, ra = at(wp, 19), at(wp, 23), at(wp, 21), at(wp, 22)
-    udot, net, cut, lam, fs = at(op, 0), at(op, 1), at(op, 2), at(op, 3), at(op, 6)
-    ref = at(wp, 43)
-    size = at(pp, 20)[0]
+    ji, pi, pf = at(pp, P_JOINTS), at(pp, P_PRIMS), at(pp, P_PRIM_VALUES)
+    sj, sp = at(pp, P_SCENE_JOINTS), at(pp, P_SCENE_POINTS)
+    ct, cv = at(pp, P_COUPLINGS), at(pp, P_COUPLING_VALUES)
+    rot, com, vel, acc = at(wp, W_ROT), at(wp, W_COM), at(wp, W_VEL), at(wp, W_ACC)
+    inert = at(wp, W_INERTIA)
+    s, pts, cb, fext = at(wp, W_MOTION), at(wp, W_JOINT_POINTS), at(wp, W_BIAS), at(wp, W_LOADS)
+    tau = at(wp, W_TAU)
+    phi, g, rb, ra = at(wp, W_PHI), at(wp, W_G), at(wp, W_ROW_B), at(wp, W_ROW_A)
+    udot, net, cut, lam, fs = at(op, O_UDOT), at(op, O_NET), at(op, O_CUT), at(op, O_LAMBDA), \
+        at(op, O_PAIR)
+    ref = at(wp, W_REFERENCE)
+    size = at(pp, P_TOLERANCES)[T_SIZE]
     m, nv = g.shape[0], g.shape[1]
     for k in range(ji.shape[0]):  # the true accelerations (the kinematics' are at u̇ = 0)
         par, ch, iu, nvj = ji[k, 1], ji[k, 2], ji[k, 4], ji[k, 6]
@@ -175,7 +228,7 @@ def _reactions(pp, wp, op, u, row):
         for c in range(6):
             cut[k, c] = 0.0
     if m:
-        _multipliers(pp, wp, lam, at(op, 4), at(op, 5))
+        _multipliers(pp, wp, lam, at(op, O_R), at(op, O_VECTOR))
     for n in range(pi.shape[0]):  # each cut row's force λ ρ on b (fs[0]) and on a (fs[1])
         kind, a, b, r0, k = pi[n, 0], pi[n, 1], pi[n, 2], pi[n, 3], pi[n, 4]
         if kind == 0:  # point: ρ_b = (x_b × e_i, e_i), ρ_a = −(x_a × e_i, e_i)
@@ -257,9 +310,10 @@ def _reactions(pp, wp, op, u, row):
 def _energy(pp, wp, q, ref):
     """J: kinetic + gravity + the springs' (bodies', tree and cut joints'), as `System.energy`
     (after `kinematics`, whose positions are from ``ref``)."""
-    ji, bweight, si, sf, li, lf = at(pp, 1), at(pp, 11), at(pp, 16), at(pp, 17), at(pp, 18), \
-        at(pp, 19)
-    rot, com, vel, inert = at(wp, 0), at(wp, 1), at(wp, 2), at(wp, 4)
+    ji, bweight, si = at(pp, P_JOINTS), at(pp, P_WEIGHT), at(pp, P_SPRINGS)
+    sf, li, lf = at(pp, P_SPRING_VALUES), at(pp, P_LOADED), \
+        at(pp, P_LOADED_VALUES)
+    rot, com, vel, inert = at(wp, W_ROT), at(wp, W_COM), at(wp, W_VEL), at(wp, W_INERTIA)
     e = 0.0
     for i in range(com.shape[0]):
         v = vel[i]
@@ -279,7 +333,7 @@ def _energy(pp, wp, q, ref):
         j = li[n]
         coord = (-1.0 if ji[j, 7] else 1.0) * q[ji[j, 3]]
         e += 0.5 * lf[n, 0] * (coord - lf[n, 1]) ** 2
-    ci, cf = at(pp, 21), at(pp, 22)
+    ci, cf = at(pp, P_CUT_LOADS), at(pp, P_CUT_LOAD_VALUES)
     for n in range(ci.shape[0]):
         if cf[n, 15] != 0.0:
             e += 0.5 * cf[n, 15] * _cut_stretch(rot, com, ref, ci[n, 0], ci[n, 1], ci[n, 2],

@@ -11,6 +11,28 @@ import math
 import numpy as np
 
 from massprops.dynamics.compiled.jit import array_inner, array_jit, inlined
+from massprops.dynamics.compiled.systems_layout import (
+    D_BODIES,
+    D_JOINTS,
+    D_M,
+    D_NQ,
+    D_NV,
+    P_COUPLINGS,
+    P_DIMS,
+    P_JOINTS,
+    P_TOLERANCES,
+    T_PROJECTION_ATOL,
+    T_SINGULAR_MARGIN,
+    W_B,
+    W_DELTA,
+    W_G,
+    W_KEEP,
+    W_PHI,
+    W_QR,
+    W_ROWS,
+    W_SINGULAR,
+    W_SVD_U,
+)
 from massprops.dynamics.compiled.systems_linalg import det
 from massprops.dynamics.compiled.systems_loops import (
     LINALG,
@@ -34,24 +56,55 @@ PROJECT_ITERATIONS = 12
 
 @array_jit
 def workspace(prog):
-    """The scratch arrays of every kernel (indices are the kernels' contract, see the names)."""
-    dims = prog[0]
-    nq, nv, m, n, nj = dims[0], dims[1], dims[2], dims[3], dims[4]
+    """The scratch arrays of every kernel, in `systems_layout`'s order (its ``W_*`` names give
+    each one's slot and meaning; tests/test_systems_compiled.py checks each shape by name)."""
+    dims = prog[P_DIMS]
+    nq, nv, m, n, nj = dims[D_NQ], dims[D_NV], dims[D_M], dims[D_BODIES], dims[D_JOINTS]
     p, kk = max(m, nv), min(m, nv)
-    nqc = nq if prog[23].shape[0] else 0  # the coordinates, kept only for couplings' rows
-    return (np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 6)), np.zeros((n, 6)),  # 0-3
-            np.zeros((n, INERTIA_SIZE)), np.zeros((6, nv)), np.zeros((nj, 3)),  # 4-6
-            np.zeros((n, 6)),  # 7
-            np.zeros((4, 3, 3)), np.zeros((16, 3)), np.zeros((6, 6)), np.zeros((n, 6)),  # 8-11
-            np.zeros(nv), np.zeros((n, 6, 6)), np.zeros((n, 6)), np.zeros(nv),  # 12-15
-            np.zeros((nj, 6, 6)), np.zeros((nj, 6, 6)), np.zeros((2, 6, 6)), np.zeros(m),  # 16-19
-            np.zeros(m), np.zeros((m, 6)), np.zeros((m, 6)), np.zeros((m, nv)),  # 20-23
-            np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((m, nv)), np.zeros((p, p)),  # 24-27
-            np.zeros((p, p)), np.zeros(p), np.zeros(1 + p, dtype=np.int64),  # 28-30
-            np.zeros((m, kk)), np.zeros((nv, kk)), np.zeros(nv), np.zeros(nqc),  # 31-34
-            np.zeros(nv), np.zeros(m), np.zeros(max(nq, nv)), np.zeros(nq + nv),  # 35-38
-            np.zeros(1 + p, dtype=np.int64), np.zeros(p), np.zeros((n, INERTIA_SIZE)),  # 39-41
-            np.zeros((kk, kk)), np.zeros(3))  # 42-43
+    nqc = nq if prog[P_COUPLINGS].shape[0] else 0  # the coordinates, kept only for couplings' rows
+    return (np.zeros((n, 3, 3)),  # W_ROT
+            np.zeros((n, 3)),  # W_COM
+            np.zeros((n, 6)),  # W_VEL
+            np.zeros((n, 6)),  # W_ACC
+            np.zeros((n, INERTIA_SIZE)),  # W_INERTIA
+            np.zeros((6, nv)),  # W_MOTION
+            np.zeros((nj, 3)),  # W_JOINT_POINTS
+            np.zeros((n, 6)),  # W_BIAS
+            np.zeros((4, 3, 3)),  # W_M3
+            np.zeros((16, 3)),  # W_V3
+            np.zeros((6, 6)),  # W_M6
+            np.zeros((n, 6)),  # W_LOADS
+            np.zeros(nv),  # W_TAU
+            np.zeros((n, 6, 6)),  # W_ART_INERTIA
+            np.zeros((n, 6)),  # W_ART_BIAS
+            np.zeros(nv),  # W_ABA_U
+            np.zeros((nj, 6, 6)),  # W_ABA_DINV
+            np.zeros((nj, 6, 6)),  # W_ABA_UMAT
+            np.zeros((2, 6, 6)),  # W_M6_PAIR
+            np.zeros(m),  # W_PHI
+            np.zeros(m),  # W_GDOT
+            np.zeros((m, 6)),  # W_ROW_B
+            np.zeros((m, 6)),  # W_ROW_A
+            np.zeros((m, nv)),  # W_G
+            np.zeros((nv, nv)),  # W_MASS
+            np.zeros((nv, nv)),  # W_CHOL
+            np.zeros((m, nv)),  # W_B
+            np.zeros((p, p)),  # W_QR
+            np.zeros((p, p)),  # W_SVD_WORK
+            np.zeros(p),  # W_SINGULAR
+            np.zeros(1 + p, dtype=np.int64),  # W_KEEP
+            np.zeros((m, kk)),  # W_SVD_U
+            np.zeros((nv, kk)),  # W_SVD_V
+            np.zeros(nv),  # W_COLUMN
+            np.zeros(nqc),  # W_Q
+            np.zeros(nv),  # W_H
+            np.zeros(m),  # W_ROWS
+            np.zeros(max(nq, nv)),  # W_DELTA
+            np.zeros(1 + p, dtype=np.int64),  # W_ORDER
+            np.zeros(p),  # W_REFLECTORS
+            np.zeros((n, INERTIA_SIZE)),  # W_COMPOSITE
+            np.zeros((kk, kk)),  # W_Z
+            np.zeros(3))  # W_REFERENCE
 
 
 @array_jit
@@ -72,8 +125,8 @@ def rhs_ref(pp, wp, t, y, out, rank0):
 def _rhs(pp, wp, t, y, out, rank0, posed):
     """`rhs_ref`; ``posed``: the workspace holds the poses and factors at y's q
     (`systems_loops.accelerations`)."""
-    ji = at(pp, 1)
-    nq = at(pp, 0)[0]
+    ji = at(pp, P_JOINTS)
+    nq = at(pp, P_DIMS)[D_NQ]
     q, u = y[:nq], y[nq:]
     status = accelerations(pp, wp, t, q, u, out[nq:], rank0, posed)
     for k in range(ji.shape[0]):
@@ -122,7 +175,7 @@ def _quat_turn(q, o, rv, ir):
 @array_inner
 def normalize(pp, q):
     """Every quaternion coordinate of q renormalised in place (pp: the program by reference)."""
-    ji = at(pp, 1)
+    ji = at(pp, P_JOINTS)
     for k in range(ji.shape[0]):
         if ji[k, 0] == SPHERICAL or ji[k, 0] == FREE:
             o = ji[k, 3] + (3 if ji[k, 0] == FREE else 0)
@@ -135,7 +188,7 @@ def normalize(pp, q):
 def _advance(pp, q, delta):
     """q moved by the tangent delta: coordinates add, quaternions turn by exp(δ) on their
     moving side (`tree.advance`)."""
-    ji = at(pp, 1)
+    ji = at(pp, P_JOINTS)
     for k in range(ji.shape[0]):
         kind, iq, iu, nqj = ji[k, 0], ji[k, 3], ji[k, 4], ji[k, 5]
         if kind == SPHERICAL:
@@ -167,14 +220,14 @@ def project_ref(pp, wp, y, iterations, moved, stale):
     the residual test as an exact one would: the two states differ by about the step's local
     error) instead of factoring M at y's q. Every later pass, and the last, which the velocity
     projection and the right-hand side after it use, factors at its own q."""
-    nq, m = at(pp, 0)[0], at(pp, 0)[2]
+    nq, m = at(pp, P_DIMS)[D_NQ], at(pp, P_DIMS)[D_M]
     moved[0] = moved[1] = 0.0
     if m == 0:
         return OK
     q, u = y[:nq], y[nq:]
     normalize(pp, q)
-    atol = at(pp, 20)[2]
-    phi, g, delta, row = at(wp, 19), at(wp, 23), at(wp, 37), at(wp, 36)
+    atol = at(pp, P_TOLERANCES)[T_PROJECTION_ATOL]
+    phi, g, delta, row = at(wp, W_PHI), at(wp, W_G), at(wp, W_DELTA), at(wp, W_ROWS)
     nv = u.shape[0]
     done = 0
     stale = stale and iterations > 0
@@ -231,10 +284,11 @@ def _largest(v):
 def accept(pp, wp, acc_b, acc_u, istats, fstats, t):
     """After the right-hand side at an accepted state (time t): CROSSED when a kept singular
     value of B = G L⁻ᵀ (`systems_loops.decompose`) changed sign since the last accepted step
-    (det(U_prevᵀ B B_prevᵀ U_prev) ≤ 0) or is below prog[20][3] (NEAR_SINGULAR_MARGIN) of the
-    largest (fstats[6] the smallest such ratio, fstats[2] the run's), else OK; the step's B and
+    (det(U_prevᵀ B B_prevᵀ U_prev) ≤ 0) or is below `T_SINGULAR_MARGIN` (NEAR_SINGULAR_MARGIN) of
+    the largest (fstats[6] the smallest such ratio, fstats[2] the run's), else OK; the step's B and
     kept U become the last accepted (istats[5] their rank)."""
-    bm, uo, keep, x, sv = at(wp, 26), at(wp, 31), at(wp, 30), at(wp, 27), at(wp, 29)
+    bm, uo, keep, x = at(wp, W_B), at(wp, W_SVD_U), at(wp, W_KEEP), at(wp, W_QR)
+    sv = at(wp, W_SINGULAR)
     m, nv = bm.shape[0], bm.shape[1]
     if m == 0:
         return OK
@@ -251,7 +305,7 @@ def accept(pp, wp, acc_b, acc_u, istats, fstats, t):
     if least < fstats[6] * top:
         fstats[6] = least / top
     fstats[2] = min(fstats[2], fstats[6])
-    if least < at(pp, 20)[3] * top:
+    if least < at(pp, P_TOLERANCES)[T_SINGULAR_MARGIN] * top:
         status = CROSSED
     if r >= 0:
         for a in range(r):
@@ -303,9 +357,9 @@ def settle(pp, wp, y, f, t_start, t, tw, moved, istats, fstats, acc_b, acc_u, yf
         fstats[5] = moved[2]
         fail(istats, fstats, yfail, status, t, y)
         return status
-    loops = at(pp, 0)[2] > 0  # the projection ended with poses and factors at y's q
+    loops = at(pp, P_DIMS)[D_M] > 0  # the projection ended with poses and factors at y's q
     if not loops:  # (its Newton steps renormalise the quaternions they turn)
-        normalize(pp, y[:at(pp, 0)[0]])
+        normalize(pp, y[:at(pp, P_DIMS)[D_NQ]])
     fstats[0] = max(fstats[0], moved[0])
     fstats[1] = max(fstats[1], moved[1])
     status = _rhs(pp, wp, tw, y, f, istats[6], loops)
@@ -314,7 +368,7 @@ def settle(pp, wp, y, f, t_start, t, tw, moved, istats, fstats, acc_b, acc_u, yf
         fail(istats, fstats, yfail, status, t, y)
         return status
     if accept(pp, wp, acc_b, acc_u, istats, fstats, t) == CROSSED:
-        fstats[4] = t_start if fstats[6] > at(pp, 20)[3] else t
+        fstats[4] = t_start if fstats[6] > at(pp, P_TOLERANCES)[T_SINGULAR_MARGIN] else t
         fail(istats, fstats, yfail, CROSSED, t, y)
         return CROSSED
     return OK

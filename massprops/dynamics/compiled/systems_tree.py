@@ -20,6 +20,31 @@ from __future__ import annotations
 import math
 
 from massprops.dynamics.compiled.jit import array_inner, inlined
+from massprops.dynamics.compiled.systems_layout import (
+    P_AXES_PARENT,
+    P_COM0,
+    P_INERTIA,
+    P_JOINTS,
+    P_MASS,
+    P_ROT_PARENT0,
+    P_ROTATION0,
+    P_S_CHILD,
+    P_S_PARENT,
+    P_TURN0,
+    W_ACC,
+    W_BIAS,
+    W_COM,
+    W_INERTIA,
+    W_JOINT_POINTS,
+    W_M3,
+    W_M6,
+    W_MOTION,
+    W_Q,
+    W_REFERENCE,
+    W_ROT,
+    W_V3,
+    W_VEL,
+)
 from massprops.dynamics.compiled.unowned import at
 
 FIXED, REVOLUTE, PRISMATIC, CYLINDRICAL, UNIVERSAL, SPHERICAL, FREE = range(7)
@@ -120,7 +145,7 @@ def _column(s, col, w, px, py, pz, turning):
 def kinematics(pp, q, u, wp):
     """Per body: R, com, V and A at u̇ = 0 (with the joint's own bias term in ``cb``), the
     inertia about O (`inertia_about_origin`'s ten numbers); per dof a column of S; per joint
-    its point (world); q itself where the system has couplings (ws[34], for
+    its point (world); q itself where the system has couplings (`W_Q`, for
     `systems_loops.terms`): `poses`, then `motion` (called, not inlined: `poses` alone takes
     ~17 s to compile, and a copy inlined here would cost that again)."""
     poses(pp, q, wp)
@@ -134,20 +159,23 @@ def poses(pp, q, wp):
     through scratch arrays: numba cannot tell that a store into one float array leaves another
     alone, so each copied value was loaded again at every use (with `motion`'s scalars, the
     four-bar's kinematics 767 → 365 ns)."""
-    ji, jsp, jsc, jrp0 = at(pp, 1), at(pp, 3), at(pp, 4), at(pp, 5)
-    bmass, binertia, brot0, bcom0 = at(pp, 7), at(pp, 8), at(pp, 9), at(pp, 10)
-    jaxp, jrc0 = at(pp, 25), at(pp, 26)
-    rot, com, inert, s, pts = at(wp, 0), at(wp, 1), at(wp, 4), at(wp, 5), at(wp, 6)
-    ref = at(wp, 43)  # the point positions are measured from (`tree.reference_point`)
+    ji, jsp, jsc = at(pp, P_JOINTS), at(pp, P_S_PARENT), at(pp, P_S_CHILD)
+    jrp0 = at(pp, P_ROT_PARENT0)
+    bmass, binertia, brot0 = at(pp, P_MASS), at(pp, P_INERTIA), at(pp, P_ROTATION0)
+    bcom0 = at(pp, P_COM0)
+    jaxp, jrc0 = at(pp, P_AXES_PARENT), at(pp, P_TURN0)
+    rot, com, inert, s = at(wp, W_ROT), at(wp, W_COM), at(wp, W_INERTIA), at(wp, W_MOTION)
+    pts = at(wp, W_JOINT_POINTS)
+    ref = at(wp, W_REFERENCE)  # the point positions are measured from (`tree.reference_point`)
     ref[0] = ref[1] = ref[2] = 0.0
     for k in range(ji.shape[0]):
         if ji[k, 0] == FREE:
             ref[0], ref[1], ref[2] = q[ji[k, 3]], q[ji[k, 3] + 1], q[ji[k, 3] + 2]
             break
-    m3, v3 = at(wp, 8), at(wp, 9)
+    m3, v3 = at(wp, W_M3), at(wp, W_V3)
     carry, qm, tmp, rp = m3[0], m3[1], m3[2], m3[3]
     d, w = v3[0], v3[2]
-    qc = at(wp, 34)  # the coordinates, for the couplings' rows (sized 0 without couplings)
+    qc = at(wp, W_Q)  # the coordinates, for the couplings' rows (sized 0 without couplings)
     for i in range(qc.size):
         qc[i] = q[i]
     for k in range(ji.shape[0]):
@@ -236,9 +264,9 @@ def poses(pp, q, wp):
 def motion(pp, u, wp):
     """What `kinematics` computes from u, after `poses`: V, A at u̇ = 0 and ``cb``, per joint
     from its parent's V and A (the world's: 0) and its S columns."""
-    ji = at(pp, 1)
-    vel, acc, s, cb = at(wp, 2), at(wp, 3), at(wp, 5), at(wp, 7)
-    v6 = at(wp, 10)
+    ji = at(pp, P_JOINTS)
+    vel, acc, s, cb = at(wp, W_VEL), at(wp, W_ACC), at(wp, W_MOTION), at(wp, W_BIAS)
+    v6 = at(wp, W_M6)
     c0, c1, su = v6[4], v6[5], v6[2]
     for k in range(ji.shape[0]):
         kind, par, ch, iu, nvj = ji[k, 0], ji[k, 1], ji[k, 2], ji[k, 4], ji[k, 6]

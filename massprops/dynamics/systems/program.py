@@ -1,36 +1,9 @@
 """A system as arrays: the "system program" the compiled kernels step (`dynamics.compiled.
 systems_*`), built once from a `System` (its Tree, loops and loads).
 
-A tuple of C-contiguous arrays, int64 or float64, in this order (the kernels index it):
- Bodies and parents use -1 for the world (model.WORLD), as the kernels test body < 0.
- 0 dims (5,) [nq, nv, m, bodies, tree joints];
- 1 joints (nj, 8) int [kind code (KIND), parent body (-1 world), child, iq, iu, nq, nv,
-   reversed]; 2 axes (nj, 2, 3) joint frame; 3 s_parent (nj, 3); 4 s_child (nj, 3);
- 5 rot_parent0 (nj, 3, 3); 6 parent_joint (n,) body -> its tree joint;
- 7 mass (n,); 8 inertia (n, 3, 3) body axes; 9 rotation0 (n, 3, 3); 10 com0 (n, 3);
- 11 weight (n, 3) m g, N;
- 12 primitives (np, 5) int [kind (PRIM), a, b, first row, the scene joint it belongs to];
-   13 (np, 13) [pa, pb, ea, nb, length];
- 14 forces (nf, 4) int [0 force / 1 torque / 2 drag, body, body frame, at a point];
- 15 (nf, 8) [vector, point in the body frame, start, end]; a drag's [linear, angular, 0, ...,
-   -inf, inf];
- 16 springs (ns, 2) int [a, b]; 17 (ns, 9) [point on a, point on b, stiffness, rest, damping];
- 18 loaded tree joints (nl,) int; 19 (nl, 6) [stiffness, rest, damping, drive, start, end];
- 20 (4,) [system size m, CONSTRAINT_RANK_RTOL, the projection's position tolerance m,
-   NEAR_SINGULAR_MARGIN]: the tolerances travel as data, so a compiled kernel never holds a
-   stale copy of one;
- 21 loaded cut joints (nc, 3) int [0 revolute / 1 prismatic, a, b]; 22 (nc, 21) [axis in a's
-   frame, the normal the turn is measured from in a's frame and in b's, the joint point in a's
-   and in b's frame, stiffness, rest, damping, drive, start, end] (`cutjoint`; body frames,
-   world for the world);
- 23 coupling terms (nt, 3) int [row, iq, iu]; 24 (nt, 2) [scale c, scale constant on a
-   coupling's first term, else 0] (`loops.Coupling`: Φ_row = Σ scale c q[iq] − scale constant);
- 25 axes in the parent's frame (nj, 2, 3), R_p0ᵀ a; 26 (nj, 3, 3) R_p0ᵀ R_c0, R_c0 the child's
-   rotation0: a joint turning by Rot(a, q) in its frame gives the child
-   R_parent Rot(R_p0ᵀ a, q) R_p0ᵀ R_c0, one 3 × 3 product fewer than through the joint frame;
- 27 scene joints (J, 2) int [its tree joint (-1: a cut joint), its second body b]; 28 (J, 3)
-   its point (the second point of a distance joint) fixed in b, b's frame (world for the
-   world): what the outputs report per scene joint (`compiled.systems_outputs`).
+A tuple of C-contiguous arrays, int64 or float64, each in the slot its name gives in
+`dynamics.compiled.systems_layout` (``P_*``: the shapes and meanings are written there, beside
+the names the kernels read them by).
 Frames and meanings as in `tree`, `loops` and `System` (the numpy objects these mirror).
 """
 
@@ -39,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from massprops import tolerances
+from massprops.dynamics.compiled import systems_layout as L
 from massprops.dynamics.systems.cutjoint import perp
 from massprops.dynamics.systems.model import WORLD
 
@@ -91,25 +65,36 @@ def build_program(system) -> tuple:
     for k, jk in enumerate(tree.loaded):
         sj = scene.joints[joints[jk].source]
         lf[k] = [sj.stiffness, sj.rest, sj.damping, sj.drive, sj.start, sj.end]
-    ci, cf = _cut_loads(scene, tree)
-    dims = np.array([tree.nq, tree.nv, system.m, n, nj], np.int64)
+    dims = np.zeros(5, np.int64)
+    dims[L.D_NQ], dims[L.D_NV], dims[L.D_M], dims[L.D_BODIES], dims[L.D_JOINTS] = \
+        tree.nq, tree.nv, system.m, n, nj
+    tols = np.zeros(4)
+    tols[L.T_SIZE], tols[L.T_RANK_RTOL] = tree.size, tolerances.CONSTRAINT_RANK_RTOL
+    tols[L.T_PROJECTION_ATOL] = tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size
+    tols[L.T_SINGULAR_MARGIN] = tolerances.NEAR_SINGULAR_MARGIN
     rot0 = np.array([b.rotation0 for b in bodies], float).reshape(n, 3, 3)
-    out = (dims, ji, axes, sp, sc, rp0, parent_joint,
-           np.array([b.mass for b in bodies], float),
-           np.array([b.inertia for b in bodies], float).reshape(n, 3, 3), rot0,
-           np.array([b.com0 for b in bodies], float).reshape(n, 3),
-           np.asarray(system.weights, float).reshape(n, 3), pi, pf, fi, ff, si, sf, li, lf,
-           np.array([tree.size, tolerances.CONSTRAINT_RANK_RTOL,
-                     tolerances.PROJECTION_ATOL_ULPS * tolerances.EPS * tree.size,
-                     tolerances.NEAR_SINGULAR_MARGIN]), ci, cf, *_couplings(tree, row),
-           np.einsum("kji,kaj->kai", rp0, axes),  # R_p0ᵀ a: the axes in the parent's frame
-           np.einsum("kji,kjl->kil", rp0, rot0[ji[:, 2]]),  # R_p0ᵀ R_c0
-           *_scene_joints(scene, tree))
-    return tuple(np.ascontiguousarray(a) for a in out)
+    slots = {
+        L.P_DIMS: dims, L.P_JOINTS: ji, L.P_AXES: axes, L.P_S_PARENT: sp, L.P_S_CHILD: sc,
+        L.P_ROT_PARENT0: rp0, L.P_PARENT_JOINT: parent_joint,
+        L.P_MASS: np.array([b.mass for b in bodies], float),
+        L.P_INERTIA: np.array([b.inertia for b in bodies], float).reshape(n, 3, 3),
+        L.P_ROTATION0: rot0, L.P_COM0: np.array([b.com0 for b in bodies], float).reshape(n, 3),
+        L.P_WEIGHT: np.asarray(system.weights, float).reshape(n, 3),
+        L.P_PRIMS: pi, L.P_PRIM_VALUES: pf, L.P_FORCES: fi, L.P_FORCE_VALUES: ff,
+        L.P_SPRINGS: si, L.P_SPRING_VALUES: sf, L.P_LOADED: li, L.P_LOADED_VALUES: lf,
+        L.P_TOLERANCES: tols,
+        L.P_AXES_PARENT: np.einsum("kji,kaj->kai", rp0, axes),  # R_p0ᵀ a
+        L.P_TURN0: np.einsum("kji,kjl->kil", rp0, rot0[ji[:, 2]]),  # R_p0ᵀ R_c0
+    }
+    slots[L.P_CUT_LOADS], slots[L.P_CUT_LOAD_VALUES] = _cut_loads(scene, tree)
+    slots[L.P_COUPLINGS], slots[L.P_COUPLING_VALUES] = _couplings(tree, row)
+    slots[L.P_SCENE_JOINTS], slots[L.P_SCENE_POINTS] = _scene_joints(scene, tree)
+    return tuple(np.ascontiguousarray(slots[k]) for k in range(L.PROGRAM_SLOTS))
 
 
 def _couplings(tree, first: int) -> tuple[np.ndarray, np.ndarray]:
-    """Program entries 23 and 24: the couplings' terms, their rows from ``first`` on."""
+    """The program's `P_COUPLINGS` and `P_COUPLING_VALUES`: the couplings' terms, their rows
+    from ``first`` on."""
     ti, tf = [], []
     for r, c in enumerate(tree.couplings):
         for k, (iq, iu, coef) in enumerate(c.terms):
@@ -119,7 +104,8 @@ def _couplings(tree, first: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _scene_joints(scene, tree) -> tuple[np.ndarray, np.ndarray]:
-    """Program entries 27 and 28: each scene joint's tree joint, second body and point."""
+    """The program's `P_SCENE_JOINTS` and `P_SCENE_POINTS`: each scene joint's tree joint,
+    second body and point."""
     ji = np.zeros((len(scene.joints), 2), np.int64)
     jp = np.zeros((len(scene.joints), 3))
     for k, j in enumerate(scene.joints):
@@ -132,7 +118,7 @@ def _scene_joints(scene, tree) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _cut_loads(scene, tree) -> tuple[np.ndarray, np.ndarray]:
-    """Program entries 21 and 22: the loaded cut joints (module doc)."""
+    """The program's `P_CUT_LOADS` and `P_CUT_LOAD_VALUES`: the loaded cut joints."""
     bodies = tree.bodies
     ci = np.zeros((len(tree.cut_loaded), 3), np.int64)
     cf = np.zeros((len(tree.cut_loaded), 21))
