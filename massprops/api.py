@@ -87,11 +87,9 @@ def load_scene(path: PathLike) -> Scene | SystemScene:
     a scene with ``bodies:`` or ``model:`` (a system, docs/systems.md) a `SystemScene`; a robot
     description (``.urdf``, ``.sdf``, ``.xml``) gives the scene ``massprops simulate ROBOT``
     runs (its stated inertials and base, gravity, 1 s from the zero pose at rest)."""
-    # deferred: start-up
-    from massprops.dynamics.scene import load_scene as load
-    from massprops.dynamics.systems.robot_scene import is_system_file, load_any_system
+    from massprops.dynamics.any_scene import load  # deferred: start-up
 
-    return load_any_system(path) if is_system_file(path) else load(path)
+    return load(path)
 
 
 def simulate(scene: Scene | SystemScene | PathLike,
@@ -101,29 +99,17 @@ def simulate(scene: Scene | SystemScene | PathLike,
     ``simulate --json`` object). ``options``: integrator, rtol, step, every, max_steps. A
     system (a `SystemScene`) gives a `SystemResult` (the same keys, per body and joint),
     with the same ``options``."""
-    # deferred: start-up
-    from massprops.dynamics.simulate import simulate as run
-    from massprops.dynamics.systems.model import SystemScene
-    from massprops.dynamics.systems.run import simulate_system
+    from massprops.dynamics import any_scene  # deferred: start-up
 
-    scene = scene if _is_scene(scene) else load_scene(scene)
-    if isinstance(scene, SystemScene):
-        return simulate_system(scene, **options)
-    return run(scene, **options)
+    return any_scene.simulate(scene if _is_scene(scene) else load_scene(scene), **options)
 
 
 def precision(scene: Scene | SystemScene | PathLike, **options: Any) -> PrecisionReport:
     """Error against run time, integrator by integrator, over ladders of tolerances or steps;
     ``options``: integrators (names)."""
-    # deferred: start-up
-    from massprops.dynamics.precision import precision as run
-    from massprops.dynamics.systems.model import SystemScene
-    from massprops.dynamics.systems.precision import precision_system
+    from massprops.dynamics import any_scene  # deferred: start-up
 
-    scene = scene if _is_scene(scene) else load_scene(scene)
-    if isinstance(scene, SystemScene):
-        return precision_system(scene, **options)
-    return run(scene, **options)
+    return any_scene.precision(scene if _is_scene(scene) else load_scene(scene), **options)
 
 
 def _is_scene(value: Any) -> bool:

@@ -30,6 +30,17 @@ def test_sample_arm_static_torques_in_closed_form(run):
     assert result.stderr.count("not enforced") == 1
 
 
+def test_the_start_pose_summary_says_nothing_was_integrated(run):
+    """At duration 0 there is no motion, so no estimate to miss: the summary says so, not that
+    companion runs failed (as it once did)."""
+    result = run("simulate", SCENES / "robot_arm.urdf", "--duration", "0")
+    assert result.exit_code == 0, result.stderr
+    head = result.stdout.splitlines()[0]
+    assert head.endswith("t = 0 s in 0 steps; error estimate none (the start pose: no motion "
+                         "integrated)")
+    assert "shoulder (revolute)" in result.stdout and "holding" in result.stdout
+
+
 def test_sample_arm_scene_loses_energy_only_to_its_damper():
     scene = load_any_system(SCENES / "robot_arm.yaml")
     assert [b.name for b in scene.bodies] == ["turret", "upper_arm", "forearm", "slider"]

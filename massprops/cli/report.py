@@ -158,6 +158,35 @@ def print_alignment(input_path: str, output_path: str, alignment, repairs: dict 
         _console.print(_repairs_table({k: r.as_dict() for k, r in repairs.items()}))
 
 
+def print_run(name: str, scene, result) -> None:
+    """Summary of `massprops simulate` of the scene the user named ``name``: a system's
+    (`print_system_run`) or one body's (`print_simulation`)."""
+    # deferred: the scene kinds, decided where they were loaded
+    from massprops.dynamics.any_scene import is_system
+
+    if is_system(scene):
+        print_system_run(name, scene, result)
+    else:
+        print_simulation(scene, result)
+
+
+def print_system_run(name: str, scene, result) -> None:
+    """A system run in a few lines: its size, where and how it ended, each scene joint's
+    coordinates and reaction (the JSON's ``final``)."""
+    data = result.as_dict()
+    diag = data["diagnostics"]
+    static = scene.time.duration == 0  # the start pose's reactions: nothing was integrated
+    said = ("none (the start pose: no motion integrated)" if static
+            else estimate_said(diag["error_estimate"], result.interrupted, ""))
+    print(f"{name}: {len(scene.bodies)} bodies, {len(scene.joints)} joints, "
+          f"{diag['degrees_of_freedom']} degrees of freedom; t = {data['final']['t']:g} s "
+          f"in {data['steps']} steps; error estimate {said}")
+    for joint_name, joint in data["final"]["joints"].items():
+        held = f", holding {joint['holding']}" if "holding" in joint else ""
+        print(f"  {joint_name} ({joint['type']}): q = {joint['coordinates']}, "
+              f"force {joint['force']} N, torque {joint['torque']} N·m{held}")
+
+
 def print_simulation(scene, result) -> None:
     """Summary of `massprops simulate`: method and why, cost, final state, diagnostics."""
     head = Table(show_header=False, box=None, padding=(0, 2), title_justify="left",
