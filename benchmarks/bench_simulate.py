@@ -71,7 +71,7 @@ class Problem:
         self.program = compile_forces(self.scene)
         self.t_out = np.linspace(0.0, self.scene.time.duration, SAMPLES + 1)
         self.truth, self.reference = reference_run(self.scene, self.program, INTEGRATORS,
-                                                   self.t_out)
+                                                   self.scene.time.duration / SAMPLES)
         self.scales = Scales.of(self.scene.body.size, self.truth, self.scene.time.duration)
         self.blocks = peer.block_scales(self.scene, self.truth)
 

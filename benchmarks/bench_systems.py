@@ -32,7 +32,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from massprops.dynamics.systems.integrate import integrate  # noqa: E402
-from massprops.dynamics.systems.run import _floors, _windows, prepare, simulate_system  # noqa: E402
+from massprops.dynamics.systems.run import (  # noqa: E402
+    error_floors,
+    load_windows,
+    prepare,
+    simulate_system,
+)
 from massprops.dynamics.systems.scene import load_system, parse_system  # noqa: E402
 
 LADDER = tuple(10.0 ** (-k / 2) for k in range(16, 27))  # 1e-8 ... 1e-13 in half decades
@@ -42,7 +47,7 @@ def _run(scene, rtol: float, repeat: int):
     """(best wall s, run) of the integration alone, outputs at 0 and the end."""
     system, y0, _ = prepare(scene)
     t_out = np.array([0.0, scene.time.duration])
-    floors, windows = _floors(system, scene.time.duration), _windows(scene)
+    floors, windows = error_floors(system, scene.time.duration), load_windows(scene)
     integrate(system, y0, t_out, rtol, floors, windows)  # warm: kernel loaded
     best, run = np.inf, None
     for _ in range(repeat):

@@ -169,7 +169,7 @@ def _on_the_engine(name, program, y0, duration, setting, t_out, rot_only) -> Run
     from massprops.dynamics.systems.integrate import integrate as step_loop
     from massprops.dynamics.systems.one_body import as_system
     from massprops.dynamics.systems.outputs import evaluate_states
-    from massprops.dynamics.systems.run import _floors, _windows, prepare
+    from massprops.dynamics.systems.run import error_floors, load_windows, prepare
 
     scene = scene_of(program)
     assert np.array_equal(scene.body.principal_axes, np.eye(3)), "principal axes = body axes"
@@ -180,8 +180,8 @@ def _on_the_engine(name, program, y0, duration, setting, t_out, rot_only) -> Run
     system_scene = as_system(scene)
     system, y_start, _ = prepare(system_scene)
     times = np.unique(np.append(t_out, float(duration)))
-    run = step_loop(system, y_start, times, float(setting), _floors(system, duration),
-                    _windows(system_scene), method=name)
+    run = step_loop(system, y_start, times, float(setting), error_floors(system, duration),
+                    load_windows(system_scene), method=name)
 
     def states(t, y):
         """(n, 13) principal-frame states of the engine's (n, ny) states at times t."""

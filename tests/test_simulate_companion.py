@@ -62,7 +62,8 @@ def test_concurrent_companion_gives_the_sequential_numbers(name, settings):
     others = [sim.run_once(sc, program, spec, s, t_out)
               for s in companion_settings(spec.kind, setting)]
     traj = sim.to_world(sc, main.t, main.y, program, with_energy=True)
-    expected = sim._error_estimate(sc, program, spec, setting, traj, others, main.short_err)
+    expected = sim._error_estimate(sc, program, spec, setting, traj, others, main.short_err,
+                                   int(main.stats[0]))
     assert result.diagnostics["error_estimate"] == expected  # bit for bit
     assert np.array_equal(result.trajectory.orientation, traj.orientation)
     assert np.array_equal(result.trajectory.position, traj.position)

@@ -13,8 +13,6 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
-import numpy as np
-
 from massprops.dynamics.accuracy import Scales, exact_roundoff, global_estimate, state_error
 from massprops.dynamics.budget import sample_times
 from massprops.dynamics.compiled.compiling import prepare
@@ -122,18 +120,18 @@ def precision(scene: Scene, *, integrators: Sequence[str] | None = None,
                              f"to this scene; applicable: {', '.join(names)}")
         names = [n for n in names if n in integrators]
     # the times every rung's `simulate(every=...)` samples, so that all compare at each
-    t_out = sample_times(scene.time.duration, scene.time.duration / SAMPLES)
+    every = scene.time.duration / SAMPLES  # every run samples at the same times
     # the rungs' kernels and the reference's (a time-stepped method's: its systems entries)
     method = reference_method(scene, program, INTEGRATORS)
     prepare(list(dict.fromkeys(k for n in (*names, method) for k in _kernels(n))), notice)
-    truth, reference = reference_run(scene, program, INTEGRATORS, t_out)
+    truth, reference = reference_run(scene, program, INTEGRATORS, every)
     scales = Scales.of(scene.body.size, truth, scene.time.duration)
     plan = [(n, s) for n in names for s in ladder(INTEGRATORS[n], scene, program)]
     floor = AT_REFERENCE * reference["accuracy"]
     runs, done = [], set()
     for i, (name, setting) in enumerate(plan):
         if name not in done:
-            run = _rung(scene, program, INTEGRATORS[name], setting, t_out, truth, scales)
+            run = _rung(scene, program, INTEGRATORS[name], setting, truth, scales)
             runs.append(run)
             if ((run.error is not None and run.error <= floor)
                     or (run.wall_time_s or 0.0) > MAX_RUN_S):
@@ -150,8 +148,9 @@ def reference_method(scene: Scene, program: ForceProgram, registry: Mapping) -> 
     return "implicit" if choose_integrator(scene, program, registry)[0] == "implicit" else "dop853"
 
 
-def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out: np.ndarray):
-    """(trajectory, description) of the truth the ladders are measured against.
+def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, every: float):
+    """(trajectory, description) of the truth the ladders are measured against, sampled every
+    ``every`` s.
 
     exact where it applies; else dop853 at rtol 1e-13 checked against rtol 1e-12 (their distance
     bounds the tighter one's error by tolerance proportionality: ~1/9 of it), or, for stiff
@@ -160,7 +159,7 @@ def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out:
     """
     method = reference_method(scene, program, registry)
     if method == "exact":
-        truth = _trajectory(scene, program, registry["exact"], 0.0, t_out)
+        truth = _trajectory(scene, program, registry["exact"], 0.0, every)
         scales = Scales.of(scene.body.size, truth, scene.time.duration)
         return truth, {"kind": "exact", "integrator": "exact", "setting": None,
                        "accuracy": exact_roundoff(truth, scales),
@@ -168,7 +167,7 @@ def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out:
     if method == "implicit":
         spec = registry["implicit"]
         fine = ladder(spec, scene, program)[-1] / 4
-        truth, check, coarse = (_trajectory(scene, program, spec, k * fine, t_out)
+        truth, check, coarse = (_trajectory(scene, program, spec, k * fine, every)
                                 for k in (1, 2, 4))
         scales = Scales.of(scene.body.size, truth, scene.time.duration)
         accuracy = global_estimate(spec.kind, spec.order, state_error(truth, check, scales),
@@ -177,7 +176,7 @@ def reference_run(scene: Scene, program: ForceProgram, registry: Mapping, t_out:
                f"{4 * fine:.3g} s (Richardson with the observed order)")
     else:
         spec, fine = registry["dop853"], 1e-13
-        truth, check = (_trajectory(scene, program, spec, rtol, t_out) for rtol in (fine, 1e-12))
+        truth, check = (_trajectory(scene, program, spec, rtol, every) for rtol in (fine, 1e-12))
         scales = Scales.of(scene.body.size, truth, scene.time.duration)
         accuracy = state_error(truth, check, scales) / 9
         how = "dop853 at rtol 1e-13 against rtol 1e-12 (tolerance proportionality)"
@@ -196,42 +195,69 @@ def _kernels(name: str) -> list[str]:
     return kernels(name)
 
 
-def _trajectory(scene, program, spec, setting, t_out):
-    """The world-frame samples at ``t_out`` of one reference run of ``spec`` at ``setting``,
-    on the engine `simulate` runs it on (a time-stepped method: the systems engine, with no
-    estimate of its own: the reference checks itself against a second run)."""
+@dataclass(frozen=True)
+class WorldRun:
+    """One run's world-frame samples (`frames.Trajectory`, up to where it got), its steps,
+    evaluations and main-run seconds; ``failure``: why it ended short (None: it did not), in
+    words that follow the scene's name; ``interrupted``: Ctrl-C stopped it."""
+
+    trajectory: object
+    steps: int
+    evaluations: int
+    wall: float
+    failure: str | None = None
+    interrupted: bool = False
+
+
+def one_run(scene: Scene, program: ForceProgram, spec, setting: float, every: float, *,
+            estimate: bool = False, max_steps: int | None = None) -> WorldRun:
+    """``scene`` (its compiled ``program``) run once with ``spec`` at ``setting`` (rtol or step,
+    s), sampled every ``every`` s as `simulate` samples (`budget.sample_times`), on the engine
+    `simulate` runs it on: a time-stepping method through `simulate` itself (its error
+    estimate's companions beside it only with ``estimate``), a splitting method or the closed
+    form on its one-body kernel (`runner.run_once`). The reference, the rungs' repeats and the
+    benchmarks all time and measure runs this one way."""
     if spec.name in SYSTEM_METHODS:
         try:
-            result = simulate(scene, integrator=spec.name, rtol=setting, step=setting,
-                              every=scene.time.duration / SAMPLES, estimate=False)
+            res = simulate(scene, integrator=spec.name, rtol=setting, step=setting, every=every,
+                           max_steps=max_steps, estimate=estimate)
         except ComputationError as exc:
-            raise ComputationError(f"{scene.source}: the reference run failed: "
-                                   f"{exc.template.removeprefix(f'{scene.source}: ')}") from exc
-        if result.interrupted:  # Ctrl-C: a part of a run is no reference
-            raise KeyboardInterrupt
-        return result.trajectory
-    run = run_once(scene, program, spec, setting, t_out)
-    if run.interrupted:
+            part = exc.partial
+            if part is None:
+                raise
+            return WorldRun(part.trajectory, part.steps, part.evaluations, part.wall_time_s,
+                            exc.template.removeprefix(f"{scene.source}: "))
+        return WorldRun(res.trajectory, res.steps, res.evaluations, res.wall_time_s,
+                        interrupted=res.interrupted)
+    t_out = sample_times(scene.time.duration, every)
+    run = run_once(scene, program, spec, setting, t_out, max_steps=max_steps)
+    traj = to_world(scene, run.t, run.y, program, with_energy=False)
+    return WorldRun(traj, int(run.stats[0]), int(run.stats[1]), run.wall,
+                    None if run.failure is None else str(run.failure), run.interrupted)
+
+
+def _trajectory(scene, program, spec, setting, every: float):
+    """The world-frame samples, every ``every`` s, of one reference run of ``spec`` at
+    ``setting`` (`one_run`: a time-stepped method with no estimate of its own, the reference
+    checks itself against a second run)."""
+    run = one_run(scene, program, spec, setting, every)
+    if run.interrupted:  # Ctrl-C: a part of a run is no reference
         raise KeyboardInterrupt
     if run.failure is not None:
         raise ComputationError(f"{scene.source}: the reference run failed: {run.failure}")
-    return to_world(scene, run.t, run.y, program, with_energy=False)
+    return run.trajectory
 
 
-def _main_wall(scene, program, spec, setting, t_out, every: float) -> float:
-    """The wall time (s) of one more main run of ``spec`` at ``setting``, on the engine
-    `simulate` runs it on (a time-stepped method: the system of one body, with its estimate's
-    companions beside it; a closed form or splitting method: the one-body kernels)."""
-    if spec.name in SYSTEM_METHODS:
-        return simulate(scene, integrator=spec.name, rtol=setting, step=setting,
-                        every=every).wall_time_s
-    again = run_once(scene, program, spec, setting, t_out)
-    if again.interrupted:
+def _main_wall(scene, program, spec, setting, every: float) -> float:
+    """The wall time (s) of one more main run of ``spec`` at ``setting`` as `simulate` runs it
+    (a time-stepped method with its estimate's companions beside it, `one_run`)."""
+    run = one_run(scene, program, spec, setting, every, estimate=True)
+    if run.interrupted:
         raise KeyboardInterrupt
-    return again.wall
+    return run.wall
 
 
-def _rung(scene, program, spec, setting, t_out, truth, scales) -> PrecisionRun:
+def _rung(scene, program, spec, setting, truth, scales) -> PrecisionRun:
     every = scene.time.duration / SAMPLES
     name = {"adaptive": "rtol", "fixed": "step_s"}.get(spec.kind, "none")
     try:
@@ -248,7 +274,7 @@ def _rung(scene, program, spec, setting, t_out, truth, scales) -> PrecisionRun:
     error = state_error(result.trajectory, truth, scales)
     wall, spent, tries = result.wall_time_s, result.wall_time_s, 1
     while spent < MIN_TIMED_S and tries < 5:  # best of repeats: only the main run is timed
-        again = _main_wall(scene, program, spec, setting, t_out, every)
+        again = _main_wall(scene, program, spec, setting, every)
         wall, spent, tries = min(wall, again), spent + again, tries + 1
     measured = math.isfinite(error)
     return PrecisionRun(spec.name, setting, name, wall, error if measured else None,

@@ -220,7 +220,8 @@ def _run_and_check(scene, program, spec, name, reason, setting, t_out, progress,
     if not run.interrupted and (side is not None or spec.kind == "exact"):
         others = None if side is None else _companion_runs(side, progress)
         diagnostics["error_estimate"] = _error_estimate(scene, program, spec, setting, traj,
-                                                        others, run.short_err)
+                                                        others, run.short_err,
+                                                        int(run.stats[0]))
         note = estimate_note(scene.source, diagnostics["error_estimate"], name, spec.kind)
         if note is not None:
             result = dataclasses.replace(result, notes=(*result.notes, note))
@@ -357,12 +358,13 @@ def _companion_runs(side: CancellableJob, progress: Callable[[float], None] | No
 
 
 def _error_estimate(scene, program, spec, setting, traj, others: list[RawRun] | None,
-                    short_err: float = 0.0) -> float | None:
+                    short_err: float = 0.0, steps: int = 0) -> float | None:
     """Global error estimate in the contract's metric (see massprops.dynamics.accuracy) from the
     companion runs ``others`` (in accuracy.companion_settings order); None when it cannot be had
     (interrupted, missing, or the first companion diverged). ``short_err`` (see RawRun) is added
     in the metric's units, conservatively: its component is unknown, so it is divided by the
-    smallest scale (a quaternion error δ is an angle of about 2δ)."""
+    smallest scale (a quaternion error δ is an angle of about 2δ); and the round-off of the main
+    run's ``steps`` position updates (`_position_roundoff`)."""
     scales = Scales.of(scene.body.size, traj, scene.time.duration)
     if not companion_settings(spec.kind, setting):
         return exact_roundoff(traj, scales)
@@ -379,7 +381,7 @@ def _error_estimate(scene, program, spec, setting, traj, others: list[RawRun] | 
                             1 / scales.angular_velocity)
     estimate = global_estimate(spec.kind, spec.order, state_error(traj, first, scales),
                                d_companions, spec.estimate_order) + blind \
-        + _position_roundoff(traj, scales, int(round(scene.time.duration / setting)))
+        + _position_roundoff(traj, scales, steps)
     return estimate if math.isfinite(estimate) else None  # a companion ran away: size unknown
 
 

@@ -178,10 +178,11 @@ def _check_speeds(scene: SystemScene, tree, q: np.ndarray, u: np.ndarray) -> Non
 def _check_steps(scene: SystemScene, name: str, step: float, limit: int) -> None:
     """RunBudgetError (`budget.check_fixed_steps`) where ``name`` at ``step`` (s) would take
     more than ``limit`` steps over the scene's duration, window edges included."""
-    check_fixed_steps(name, scene.time.duration, step, len(_windows(scene)), scene.source, limit)
+    check_fixed_steps(name, scene.time.duration, step, len(load_windows(scene)), scene.source,
+                      limit)
 
 
-def _floors(system: System, duration: float) -> np.ndarray:
+def error_floors(system: System, duration: float) -> np.ndarray:
     """Smallest error scale per component: 1 rad (or the size for a length) for coordinates,
     those per duration for rates."""
     tree = system.tree
@@ -196,7 +197,9 @@ def _floors(system: System, duration: float) -> np.ndarray:
     return np.concatenate([fq, fu])
 
 
-def _windows(scene: SystemScene) -> np.ndarray:
+def load_windows(scene: SystemScene) -> np.ndarray:
+    """The times (s, sorted, finite) where a force or a joint drive of ``scene`` switches on or
+    off: the runs end a segment at each, so that no step straddles a jump of the loads."""
     edges = [f.start for f in scene.forces] + [f.end for f in scene.forces]
     edges += [j.start for j in scene.joints if j.drive] + [j.end for j in scene.joints if j.drive]
     return np.unique([e for e in edges if math.isfinite(e)])
@@ -244,9 +247,9 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
         notes.append(f"{scene.source}: {ignored}")
     t_out = sample_times(duration, every if every is not None else scene.output.every,
                          scene.source)
-    floors = _floors(system, duration)
+    floors = error_floors(system, duration)
     start = time.perf_counter()
-    side = start_companions(system, y0, t_out, name, setting, floors, _windows(scene),
+    side = start_companions(system, y0, t_out, name, setting, floors, load_windows(scene),
                             limit) if estimate else None
     try:  # the companions stop with the run, whatever ends it (a finished one: at once)
         return _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, start,
@@ -259,7 +262,7 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
 def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, start, notes, side,
             progress, interruptible) -> SystemResult:
     """`simulate_system` from the main run on, its companions running beside it (``side``)."""
-    run = integrate(system, y0, t_out, setting, floors, _windows(scene), limit, name,
+    run = integrate(system, y0, t_out, setting, floors, load_windows(scene), limit, name,
                     None if progress is None else beside(progress, side))
     wall = time.perf_counter() - start
     system.margin = run.margin
@@ -310,7 +313,7 @@ def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, star
     if side is not None and not run.interrupted:  # estimate asked (and a method with companions)
         try:
             diagnostics["error_estimate"] = error_estimate(
-                system, y0, t_out, name, setting, floors, _windows(scene), samples, 2 * limit,
+                system, y0, t_out, name, setting, floors, load_windows(scene), samples, 2 * limit,
                 run.steps, side, progress, run.short_err)
         except KeyboardInterrupt:  # Ctrl-C while the companions ran: the run itself stands
             if not interruptible:
