@@ -101,7 +101,7 @@ def simulate(scene: Scene | SystemScene | PathLike,
     with the same ``options``."""
     from massprops.dynamics import any_scene  # deferred: start-up
 
-    return any_scene.simulate(scene if _is_scene(scene) else load_scene(scene), **options)
+    return any_scene.simulate(_scene(scene), **options)
 
 
 def precision(scene: Scene | SystemScene | PathLike, **options: Any) -> PrecisionReport:
@@ -109,8 +109,9 @@ def precision(scene: Scene | SystemScene | PathLike, **options: Any) -> Precisio
     ``options``: integrators (names)."""
     from massprops.dynamics import any_scene  # deferred: start-up
 
-    return any_scene.precision(scene if _is_scene(scene) else load_scene(scene), **options)
+    return any_scene.precision(_scene(scene), **options)
 
 
-def _is_scene(value: Any) -> bool:
-    return not isinstance(value, str | os.PathLike)
+def _scene(value: Scene | SystemScene | PathLike) -> Scene | SystemScene:
+    """A scene given as itself or by its file."""
+    return load_scene(value) if isinstance(value, str | os.PathLike) else value

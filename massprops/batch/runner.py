@@ -28,7 +28,7 @@ import time
 from collections import deque
 from collections.abc import Iterable, Iterator, Sized
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from massprops.batch import plan
 from massprops.batch.inputs import BadInput
@@ -36,7 +36,7 @@ from massprops.batch.records import MeshResult, inspect_one
 from massprops.errors import ComputationError, UsageError, setting_ref
 
 if TYPE_CHECKING:
-    from concurrent.futures import Executor, Future
+    from concurrent.futures import Executor, Future, ProcessPoolExecutor
 
 WINDOW_S = 4.0
 """Estimated seconds of work per worker read ahead behind the oldest unfinished task (where
@@ -232,26 +232,28 @@ class Batch(Iterator[MeshResult]):
         # deferred: a batch run in this process loads no pool or worker code
         from massprops.batch.pool import local_pool
 
-        self._executor = local_pool(self._workers)
+        self._executor = local_pool(cast(int, self._workers))  # _start set it first
         self._own_pool = True
         self._pool_worked = False
 
     # --- the window ----------------------------------------------------------------------------
+    # the window's methods run once _start has set _workers, _chunk_s and _chunks
     def _room(self) -> bool:
         tasks = len(self._slots)
-        if tasks < 2 * self._workers:
+        if tasks < 2 * cast(int, self._workers):
             return True
-        if tasks >= MAX_TASKS_PER_WORKER * self._workers:
+        if tasks >= MAX_TASKS_PER_WORKER * cast(int, self._workers):
             return False
         head = self._slots[0]
         # a head running longer than estimated (the model is rough) earns a longer window
         running = time.monotonic() - head.started if head.started is not None else 0.0
         queued = self._queued_cost - head.chunk.cost
-        return queued < self._workers * max(WINDOW_S, head.chunk.cost, 2 * running)
+        return queued < cast(int, self._workers) * max(WINDOW_S, head.chunk.cost, 2 * running)
 
     def _fill(self) -> None:
         while not self._exhausted and self._room():
-            chunk = self._lookahead.popleft() if self._lookahead else next(self._chunks, None)
+            chunk = self._lookahead.popleft() if self._lookahead \
+                else next(cast(Iterator[plan.Chunk], self._chunks), None)
             if chunk is None:
                 self._exhausted = True
                 break
@@ -272,14 +274,14 @@ class Batch(Iterator[MeshResult]):
         not leave one worker alone with it at the end)."""
         if self._alone:
             return
-        free = IN_FLIGHT_PER_WORKER * self._workers - len(self._running())
+        free = IN_FLIGHT_PER_WORKER * cast(int, self._workers) - len(self._running())
         while free > 0:
             waiting = [s for s in self._slots if s.future is None and s.results is None
                        and not s.chunk.local and not s.alone]
             if not waiting:
                 return
             largest = max(waiting, key=lambda s: s.chunk.cost)
-            large = largest.chunk.cost >= LARGE_TASK_CHUNKS * self._chunk_s
+            large = largest.chunk.cost >= LARGE_TASK_CHUNKS * cast(float, self._chunk_s)
             self._submit(largest if large else waiting[0])
             free -= 1
 
@@ -295,8 +297,8 @@ class Batch(Iterator[MeshResult]):
             slot.future.set_result([self._here(item) for item in slot.chunk.inputs])
             slot.pool, slot.started = None, time.monotonic()
             return
-        try:
-            slot.future = self._executor.submit(run_chunk, *args)
+        try:  # not inline: a local pool or the caller's executor
+            slot.future = cast("Executor", self._executor).submit(run_chunk, *args)
         except BrokenExecutor:
             if not self._own_pool:
                 raise
@@ -319,12 +321,12 @@ class Batch(Iterator[MeshResult]):
             self._run_alone(slot)
         elif slot.future is None:
             self._submit(slot)  # the head runs now, whatever else is out
-        self._wait_for(slot)
-        error = _failure(slot.future)
+        self._wait_for(slot)  # the slot was handed out above or before: it has a future
+        error = _failure(cast("Future", slot.future))
         if error is None:
             self._end_alone(slot)
             self._pool_worked |= self._own_pool and slot.pool is self._executor
-            return slot.future.result()
+            return cast("Future", slot.future).result()
         if self._own_pool and slot.pool is self._executor and _broken(error):
             self._replace_pool(keep=slot)
         self._retry(slot, error)
@@ -334,9 +336,10 @@ class Batch(Iterator[MeshResult]):
         """Wait until ``slot`` is done, handing out more tasks as others finish."""
         from concurrent.futures import FIRST_COMPLETED, wait
 
-        while not slot.future.done():
+        while not cast("Future", slot.future).done():  # handed out: _settle
             self._fill()  # reads on while the head runs long, and hands out tasks
-            wait([s.future for s in self._running()], return_when=FIRST_COMPLETED)
+            wait([cast("Future", s.future) for s in self._running()],
+                 return_when=FIRST_COMPLETED)
 
     def _retry(self, slot: _Slot, error: BaseException) -> None:
         """Split a failed task into single files, or isolate a single file, or give up on it."""
@@ -364,7 +367,7 @@ class Batch(Iterator[MeshResult]):
         from concurrent.futures import wait
 
         self._alone = True
-        wait([s.future for s in self._running() if s is not slot])
+        wait([cast("Future", s.future) for s in self._running() if s is not slot])
         self._submit(slot)  # on a pool broken meanwhile, _submit replaces it first
 
     def _end_alone(self, slot: _Slot) -> None:
@@ -377,8 +380,9 @@ class Batch(Iterator[MeshResult]):
         # deferred: a batch run in this process loads no pool or worker code
         from massprops.batch.pool import stop_pool
 
-        old = self._executor
-        stop_pool(old)  # also waits until the old pool has failed or cancelled all its tasks
+        old = self._executor  # replaced only when it is our own local pool
+        # also waits until the old pool has failed or cancelled all its tasks
+        stop_pool(cast("ProcessPoolExecutor", old))
         self._pool_worked |= any(s.pool is old and s.future is not None and s.future.done()
                                  and _failure(s.future) is None for s in self._slots)
         if self._pool_worked:
@@ -422,10 +426,11 @@ class Batch(Iterator[MeshResult]):
             # deferred: a batch run in this process loads no pool or worker code
             from massprops.batch.pool import stop_pool
 
+            pool = cast("ProcessPoolExecutor", self._executor)  # our own: a local pool
             if hard:
-                stop_pool(self._executor)
+                stop_pool(pool)
             else:
-                self._executor.shutdown(wait=True)
+                pool.shutdown(wait=True)
 
 
 def _failure(future: Future) -> BaseException | None:
@@ -444,7 +449,7 @@ def _broken(error: BaseException | None) -> bool:
     return isinstance(error, BrokenExecutor)
 
 
-def _is_local(executor: Executor) -> bool:
+def _is_local(executor: Executor | None) -> bool:
     from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
     return isinstance(executor, (ProcessPoolExecutor, ThreadPoolExecutor))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import fnmatch
 import os
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 
@@ -65,9 +66,9 @@ class CadInspection:
     def as_dicts(self) -> list[dict]:
         """The contract's JSON objects: one per solid, then the total (several solids)."""
         f = self.file
-        out = []
+        out: list[dict] = []
         for r in self.solids:
-            d = {"file": f.name, "solid": r.solid.name, "path": r.solid.path}
+            d: dict[str, Any] = {"file": f.name, "solid": r.solid.name, "path": r.solid.path}
             d.update(r.properties.as_dict())
             d["material"] = r.material()
             d["uncertainty"] = _bars(r.properties, r.integration, r.input)
@@ -307,7 +308,8 @@ def _total(results: list[SolidResult]
         return Uncertainty(sum(b.volume for b in bars), dm, dc, dj,
                            np.full(3, np.linalg.norm(dj, 2)))
 
-    rounding = summed(lambda r: r.properties.uncertainty.rounding)
+    # every solid has a rounding bar, so the sum is one
+    rounding = cast(Uncertainty, summed(lambda r: r.properties.uncertainty.rounding))
     extra = 8 * U * (np.abs(inertia) + total * np.outer(span, span))
     rounding = Uncertainty(rounding.volume, rounding.mass + 4 * U * total,
                            rounding.center_of_mass + 4 * U * (np.abs(com) + span),

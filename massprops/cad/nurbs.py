@@ -35,7 +35,7 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass
 from types import SimpleNamespace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -136,7 +136,8 @@ def rectangle(face: Any) -> tuple[float, float, float, float] | None:
     v1, v2 = _into_range(v1, v2, lo_v, hi_v, surface.IsVPeriodic(), tol)
     if u1 is None or v1 is None:
         return None
-    return u1, u2, v1, v2
+    # _into_range gives both ends or neither
+    return u1, cast(float, u2), v1, cast(float, v2)
 
 
 def _bare(k: SimpleNamespace, face: Any) -> Any:

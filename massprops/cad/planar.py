@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import functools
 from types import SimpleNamespace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -114,7 +114,8 @@ def plane_face(face: Any, apex: np.ndarray, frame: tuple | None = None
     the first 13's quadrature bound
     plus, for a flat spline, what its flatness δ can move: δ A on the flux, times the reach
     on the moments. ValueError when the rule does not settle."""
-    o0, e1, e2, flatness = plane_frame(face) if frame is None else frame
+    # only planar faces come here: plane_frame is not None for them
+    o0, e1, e2, flatness = cast(tuple, plane_frame(face)) if frame is None else frame
     n = np.cross(e1, e2)
     p = np.asarray(apex, dtype=float)
     h = float(n @ (o0 - p))
@@ -158,7 +159,7 @@ def _pieces(face: Any) -> list[tuple[Any, float, float, int]]:
     degree is the polynomial degree of a non-rational B-spline, Bezier or line piece (0:
     not a polynomial: the orders start at 8, and two agreements in a row are asked)."""
     k = _occ()
-    out = []
+    out: list[tuple[Any, float, float, int]] = []
     for edge in face_edges(face, degenerate=False):
         curve = k.Curve(edge)
         kind = curve.GetType()

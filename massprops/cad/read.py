@@ -331,7 +331,8 @@ def _solids(pieces: list[_Piece], precision: float) -> tuple[CadSolid, ...]:
     per_part: dict[int, int] = {}
     for piece in pieces:
         per_part[piece.part] = per_part.get(piece.part, 0) + 1
-    out, seen = [], {}
+    out: list[CadSolid] = []
+    seen: dict[int, int] = {}
     for number, piece in enumerate(pieces, start=1):
         k = seen.get(piece.part, 0)
         seen[piece.part] = k + 1

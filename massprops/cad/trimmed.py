@@ -109,7 +109,7 @@ def _pieces(face: Any, u_breaks: np.ndarray, v_breaks: np.ndarray) -> list[tuple
     in the face, cut at the curve's own breaks and where it crosses an inner knot line of the
     surface (u = const or v = const)."""
     k = _occ()
-    out = []
+    out: list[tuple[Any, float, float]] = []
     for edge in face_edges(face):
         curve = k.Curve2d(edge, face)
         cuts = curve_breaks(curve)

@@ -118,7 +118,7 @@ def simulate(ctx: click.Context, scene_path: str, as_json: bool, output_path: st
                                         every=sampling, progress=progress, notice=say_note,
                                         max_steps=max_steps, interruptible=True)
         except ComputationError as exc:  # keep what was computed, exit 3
-            part = exc.partial
+            part: Any = exc.partial  # the run's result type, as far as it got
             if out and part is not None and any_scene.sample_count(part):
                 any_scene.write_trajectory(part, out, force=force, protect=protect)
             raise

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -107,7 +107,8 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
     from massprops.batch import dask_executor, expand_inputs, inspect_many
     from massprops.batch.inputs import stands_for_many
 
-    inputs = expand_inputs(meshes, recursive=recursive, files_from=files_from, null=null)
+    inputs: Iterable[Any] = expand_inputs(meshes, recursive=recursive, files_from=files_from,
+                                          null=null)
     if files_from is None:  # the whole list is known: the progress bar can count down
         inputs = list(inputs)
     summary = not quiet and (sys.stderr.isatty() or files_from is not None

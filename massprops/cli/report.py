@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Iterable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from rich.console import Console, Group
@@ -83,8 +83,8 @@ def inspection_renderable(data: dict, repaired: Iterable[str] | None = None) -> 
     def value(name: str) -> np.ndarray:
         return np.asarray(data[name], dtype=float)
 
-    def bound(name: str) -> np.ndarray:
-        return sum(np.asarray(b[name], dtype=float) for b in bars)
+    def bound(name: str) -> np.ndarray:  # an array: the round-off bar is always there
+        return cast(np.ndarray, sum(np.asarray(b[name], dtype=float) for b in bars))
 
     kinds = ["round-off"] + (["float32 input"] if data["uncertainty"]["input"] is not None
                              else []) + (["repair"] if "repair" in data["uncertainty"] else [])
@@ -114,7 +114,7 @@ def inspection_renderable(data: dict, repaired: Iterable[str] | None = None) -> 
             item = ", ".join(fmt(float(v)) if isinstance(v, float) else str(v) for v in item)
         _row(mesh, key, str(item))
 
-    parts = [head, Text(""), j, Text(""), axes, Text(""), mesh]
+    parts: list[Any] = [head, Text(""), j, Text(""), axes, Text(""), mesh]
     repairs = data.get("repairs") or {}
     shown = {k: repairs[k] for k in (repairs if repaired is None else repaired)}
     if shown:

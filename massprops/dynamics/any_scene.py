@@ -13,7 +13,8 @@ from __future__ import annotations
 import dataclasses
 import os
 from collections.abc import Callable, Mapping, Sequence
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import TYPE_CHECKING, cast
 
 if TYPE_CHECKING:
     from massprops.dynamics.model import Scene
@@ -65,10 +66,17 @@ def is_system(scene: AnyScene) -> bool:
     return isinstance(scene, SystemScene)
 
 
+def _system(scene: AnyScene) -> SystemScene | None:
+    """``scene`` as a `SystemScene`, or None for one body's."""
+    from massprops.dynamics.systems.model import SystemScene  # deferred: light, numpy only
+
+    return scene if isinstance(scene, SystemScene) else None
+
+
 def warnings(scene: AnyScene, path: str) -> list[tuple[str, str]]:
     """(file, text) of each warning reading ``scene`` gave: a one-body scene's are its mesh's
     (named by it), a system's its scene file's, ``path`` as the caller named it."""
-    source = path if is_system(scene) else scene.body_source
+    source = path if is_system(scene) else cast("Scene", scene).body_source
     return [(source, w) for w in scene.warnings]
 
 
@@ -88,15 +96,18 @@ def simulate(scene: AnyScene, *, integrator: str | None = None, rtol: float | No
     one body, a `SystemResult` for a system, each with ``as_dict()`` the contract's JSON.
     Ctrl-C returns what was computed with ``interrupted`` set where ``interruptible`` (a
     one-body run always does); failures raise with the samples computed in ``partial``."""
-    options = dict(integrator=integrator, rtol=rtol, step=step, every=every,
-                   max_steps=max_steps, progress=progress, notice=notice, estimate=estimate)
-    if is_system(scene):
+    system = _system(scene)
+    if system is not None:
         from massprops.dynamics.systems.run import simulate_system  # deferred: the systems
 
-        return simulate_system(scene, interruptible=interruptible, **options)
+        return simulate_system(system, integrator=integrator, rtol=rtol, step=step, every=every,
+                               max_steps=max_steps, progress=progress, notice=notice,
+                               estimate=estimate, interruptible=interruptible)
     from massprops.dynamics.simulate import simulate as simulate_body  # deferred: one body
 
-    return simulate_body(scene, **options)
+    return simulate_body(cast("Scene", scene), integrator=integrator, rtol=rtol, step=step,
+                         every=every, max_steps=max_steps, progress=progress, notice=notice,
+                         estimate=estimate)
 
 
 def precision(scene: AnyScene, *, integrators: Sequence[str] | None = None,
@@ -104,36 +115,41 @@ def precision(scene: AnyScene, *, integrators: Sequence[str] | None = None,
               notice: Callable[[str], None] | None = None) -> PrecisionReport:
     """Error against run time of ``scene``'s methods (`dynamics.precision`, or the systems'
     ladders `dynamics.systems.precision`)."""
-    if is_system(scene):
+    system = _system(scene)
+    if system is not None:
         from massprops.dynamics.systems.precision import precision_system  # deferred
 
-        return precision_system(scene, integrators=integrators, progress=progress,
+        return precision_system(system, integrators=integrators, progress=progress,
                                 notice=notice)
     from massprops.dynamics.precision import precision as precision_body  # deferred
 
-    return precision_body(scene, integrators=integrators, progress=progress, notice=notice)
+    return precision_body(cast("Scene", scene), integrators=integrators, progress=progress,
+                          notice=notice)
 
 
 def sample_count(result: AnyResult) -> int:
     """How many samples ``result`` holds (a failed run's part may hold none)."""
-    return len(result.samples.t if _of_system(result) else result.trajectory.t)
+    if _of_system(result):
+        return len(cast("SystemResult", result).samples.t)
+    return len(cast("SimulationResult", result).trajectory.t)
 
 
-def write_trajectory(result: AnyResult, path: str | os.PathLike, *, force: bool = False,
+def write_trajectory(result: AnyResult, path: str | Path, *, force: bool = False,
                      protect: Sequence = ()) -> None:
     """``result``'s samples as a CSV or NPZ trajectory (docs/interface.md; atomically, never
     over a file in ``protect``, nor over an existing one unless ``force``)."""
     if _of_system(result):
         from massprops.dynamics.systems.run import write_system_trajectory  # deferred
 
-        write_system_trajectory(result, path, force=force, protect=protect)
+        write_system_trajectory(cast("SystemResult", result), path, force=force,
+                                protect=protect)
         return
     from massprops.dynamics.trajectory import write_trajectory as write_body  # deferred
 
-    write_body(result.trajectory, path, force=force, protect=protect)
+    write_body(cast("SimulationResult", result).trajectory, path, force=force, protect=protect)
 
 
-def plot(result: AnyResult, path: str | os.PathLike, *, force: bool = False,
+def plot(result: AnyResult, path: str | Path, *, force: bool = False,
          protect: Sequence = ()) -> None:
     """``result`` drawn as a PNG (the plot extra): a body's rates, energy and momentum drift;
     a system's mechanism and joints."""

@@ -416,7 +416,8 @@ def ellipj(u, m, m1=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarra
     keeps its relative accuracy down to sqrt(m1).
     """
     m, m1 = _parameters(m, m1)
-    return _per_parameter(jacobi, 4, [u], m, m1)
+    sn, cn, dn, am = _per_parameter(jacobi, 4, [u], m, m1)
+    return sn, cn, dn, am
 
 
 def _f_elementwise(phi, m, m1):

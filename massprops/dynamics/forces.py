@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -61,7 +62,9 @@ class ForceProgram:
     has_torque: bool
     translation_closed_form: bool
     stiffest_rate: float
-    joints: object | None = None
+    # a held body's `joints.reduction.JointModel` (not named here: that package imports this
+    # one), else None
+    joints: Any = None
 
     @property
     def exact_solvable(self) -> bool:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from massprops.dynamics.accuracy import Scales, exact_roundoff, global_estimate, state_error
 from massprops.dynamics.budget import sample_times
@@ -222,7 +223,7 @@ def one_run(scene: Scene, program: ForceProgram, spec, setting: float, every: fl
             res = simulate(scene, integrator=spec.name, rtol=setting, step=setting, every=every,
                            max_steps=max_steps, estimate=estimate)
         except ComputationError as exc:
-            part = exc.partial
+            part: Any = exc.partial  # a SimulationResult, as far as the run got
             if part is None:
                 raise
             return WorldRun(part.trajectory, part.steps, part.evaluations, part.wall_time_s,

@@ -13,6 +13,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -74,7 +75,8 @@ def run_once(scene: Scene, program: ForceProgram, spec, setting: float, t_out: n
     keep = t_out <= t_reached
     t_kept, y_kept = t_out[keep], y_out[keep]
     if t_kept[-1] < t_reached:  # interrupted or failed between samples: keep the last state
-        t_kept, y_kept = np.append(t_kept, t_reached), np.vstack([y_kept, runner.y_last])
+        last = cast(np.ndarray, runner.y_last)  # set by every segment the run began
+        t_kept, y_kept = np.append(t_kept, t_reached), np.vstack([y_kept, last])
     failure = runner.failure
     bad = unusable_rows(y_kept)
     if bad.any():  # no kernel should let one through; never hand it on as a state
@@ -172,7 +174,7 @@ class _Runner:
         first = t0 == 0.0
         sel = np.flatnonzero((t_out >= t0) & (t_out <= t1) if first else
                              (t_out > t0) & (t_out <= t1))
-        accel = p.constant_force(active) / p.mass if rot_only else None
+        accel = cast(np.ndarray, p.constant_force(active) / p.mass if rot_only else None)
         # a segment of one or two steps (a force window shorter than the step) is stepped the
         # same way by a 2h companion, so its error is invisible to Richardson: keep the kernel's
         # own local estimate of it

@@ -15,6 +15,7 @@ import dataclasses
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 import yaml
@@ -128,7 +129,8 @@ def _mesh_body_spec(fields: dict[str, Field], base_dir: Path) -> _MeshBodySpec:
         amount = {"mass": read_positive(fields["mass"])}
     else:  # the same default as ``inspect``
         amount = {"density": read_positive(fields["density"]) if "density" in fields else 1.0}
-    repairs = {key: read_boolean(fields[key]) for key in ("union", "fill_holes") if key in fields}
+    repairs: dict[str, bool | float] = {key: read_boolean(fields[key])
+                                        for key in ("union", "fill_holes") if key in fields}
     if "shell" in fields:
         repairs["shell"] = read_positive(fields["shell"])  # metres, as every scene value
     return _MeshBodySpec(fields["mesh"], path, unit, allow_open, amount, repairs)
@@ -222,7 +224,7 @@ _INITIAL_KEYS = ("position", "orientation", "velocity", "angular_velocity",
 
 def _initial(field: Field | None, notes: list[str]) -> InitialState:
     fields = read_optional_mapping(field, _INITIAL_KEYS)
-    values: dict[str, object] = {k: read_vector(fields[k]) for k in
+    values: dict[str, Any] = {k: read_vector(fields[k]) for k in
                                  ("position", "velocity", "angular_velocity") if k in fields}
     if "orientation" in fields:
         values["orientation"] = _quaternion(fields["orientation"], notes)
@@ -233,46 +235,47 @@ def _initial(field: Field | None, notes: list[str]) -> InitialState:
     return InitialState(**values)
 
 
-def _frame(fields: dict[str, Field]) -> dict[str, object]:
+def _frame(fields: dict[str, Field]) -> dict[str, Any]:
     return {"frame": read_choice(fields["frame"], FRAMES, "frame")} if "frame" in fields else {}
 
 
-def _point(fields: dict[str, Field]) -> dict[str, object]:
+def _point(fields: dict[str, Field]) -> dict[str, Any]:
     return {"point": read_vector(fields["point"])} if "point" in fields else {}
 
 
-def _window(fields: dict[str, Field]) -> dict[str, object]:
+def _window(fields: dict[str, Field]) -> dict[str, Any]:
     """start/end (s) of a force or torque; absent means always (an infinite bound)."""
     start = read_number(fields["start"]) if "start" in fields else -INF
     end = read_number(fields["end"]) if "end" in fields else INF
     if start >= end:
-        where = fields.get("end", fields.get("start"))
+        # one of the two is given: start < end holds for both bounds infinite
+        where = cast(Field, fields.get("end", fields.get("start")))
         raise where.error(f"expected start < end, got start {start!r} and end {end!r}")
     return {"start": start, "end": end}
 
 
-def _gravity_fields(item: Field) -> dict[str, object]:
+def _gravity_fields(item: Field) -> dict[str, Any]:
     fields = read_mapping(item, ("type", "g"), {"g": "g: [0, 0, -9.81]"})
     return {"g": read_vector(fields["g"])}
 
 
-def _point_force_fields(item: Field) -> dict[str, object]:
+def _point_force_fields(item: Field) -> dict[str, Any]:
     fields = read_mapping(item, ("type", "vector", "frame", "point", "start", "end"),
                           {"vector": "vector: [1, 0, 0]"})
     return {"vector": read_vector(fields["vector"]), **_frame(fields), **_point(fields),
             **_window(fields)}
 
 
-def _torque_fields(item: Field) -> dict[str, object]:
+def _torque_fields(item: Field) -> dict[str, Any]:
     fields = read_mapping(item, ("type", "vector", "frame", "start", "end"),
                           {"vector": "vector: [0, 0, 1]"})
     return {"vector": read_vector(fields["vector"]), **_frame(fields), **_window(fields)}
 
 
-def _spring_fields(item: Field) -> dict[str, object]:
+def _spring_fields(item: Field) -> dict[str, Any]:
     fields = read_mapping(item, ("type", "anchor", "point", "stiffness", "rest_length", "damping"),
                           {"anchor": "anchor: [0, 0, 1]", "stiffness": "stiffness: 100"})
-    values: dict[str, object] = {"anchor": read_vector(fields["anchor"]),
+    values: dict[str, Any] = {"anchor": read_vector(fields["anchor"]),
                                  "stiffness": read_non_negative(fields["stiffness"]),
                                  **_point(fields)}
     for key in ("rest_length", "damping"):
@@ -281,12 +284,12 @@ def _spring_fields(item: Field) -> dict[str, object]:
     return values
 
 
-def _drag_fields(item: Field) -> dict[str, object]:
+def _drag_fields(item: Field) -> dict[str, Any]:
     fields = read_mapping(item, ("type", "linear", "angular"))
     return {key: read_non_negative(fields[key]) for key in ("linear", "angular") if key in fields}
 
 
-FORCE_TYPES: dict[str, tuple[type[ForceTerm], Callable[[Field], dict[str, object]]]] = {
+FORCE_TYPES: dict[str, tuple[type[ForceTerm], Callable[[Field], dict[str, Any]]]] = {
     "gravity": (Gravity, _gravity_fields),
     "force": (PointForce, _point_force_fields),
     "torque": (Torque, _torque_fields),
@@ -307,7 +310,7 @@ def _force(item: Field) -> ForceTerm:
 
 
 def _forces(field: Field | None) -> tuple[ForceTerm, ...]:
-    if is_null(field):
+    if field is None or is_null(field):
         return ()
     if not isinstance(field.node, yaml.SequenceNode):
         raise field.error(f"expected a list of forces, one '- {{type: ...}}' line each, "
@@ -322,7 +325,7 @@ TIME_KEYS = ("duration", "integrator", "rtol", "step")
 def _time(field: Field, known_integrators: Sequence[str]) -> TimeSettings:
     fields = read_mapping(field, TIME_KEYS,
                           {"duration": "duration: 10.0 (seconds)"})
-    values: dict[str, object] = {"duration": read_positive(fields["duration"])}
+    values: dict[str, Any] = {"duration": read_positive(fields["duration"])}
     if "integrator" in fields:
         values["integrator"] = read_choice(fields["integrator"], known_integrators, "integrator")
     if "rtol" in fields:

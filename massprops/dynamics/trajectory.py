@@ -77,7 +77,7 @@ def trajectory_bytes(traj, suffix: str) -> bytes:
         arrays = {f: np.asarray(getattr(traj, f)) for f, _, _ in COLUMNS
                   if getattr(traj, f) is not None}
         arrays.update({name: value for name, _, _, value in _joint_arrays(traj)})
-        np.savez(buf, columns=np.array(names), **arrays)
+        np.savez(buf, columns=np.array(names), **arrays)  # type: ignore[arg-type]  # numpy's stub types **kwds as its own flags
     else:
         raise UsageError(f"trajectory file must end in .csv or .npz, got {suffix!r}")
     return buf.getvalue()

@@ -180,7 +180,7 @@ def read_mapping(field: Field, known: Sequence[str],
 
 def read_optional_mapping(field: Field | None, known: Sequence[str]) -> dict[str, Field]:
     """An optional section: absent or empty (``initial:``) means all defaults."""
-    return {} if is_null(field) else read_mapping(field, known)
+    return {} if field is None or is_null(field) else read_mapping(field, known)
 
 
 def _items(field: Field, length: int, what: str) -> list[Field]:

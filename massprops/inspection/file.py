@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, BinaryIO
+from typing import TYPE_CHECKING, Any, BinaryIO, cast
 
 # numpy first, before the readers' package: imported from inside massprops.io's initialisation
 # under the CLI, numpy's own typing modules took ~13 ms longer and `python -m massprops inspect`
@@ -71,7 +71,7 @@ class Inspection:
 
     def as_dict(self) -> dict:
         """The contract's JSON object for `inspect --json`."""
-        out = {"file": self.mesh.name}
+        out: dict[str, Any] = {"file": self.mesh.name}
         out.update(self.properties.as_dict())
         out["mesh"] = self.health.as_dict()
         repairs = self.repairs_as_dict()
@@ -109,7 +109,8 @@ def inspect_mesh(mesh: Mesh, *, density: float | None = None, mass: float | None
         properties, error = _outcome(fixed, density, mass)
     if error is not None:
         raise error
-    return Inspection(fixed, health, properties)
+    # _outcome gives the properties whenever it gives no error
+    return Inspection(fixed, health, cast(MassProperties, properties))
 
 
 def inspect_file(source: str | os.PathLike | BinaryIO, *, format: str | None = None,

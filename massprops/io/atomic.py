@@ -118,7 +118,7 @@ def same_file(a: Path, b: Path | str | os.PathLike[str]) -> bool:
         return os.path.normcase(os.path.realpath(a)) == os.path.normcase(os.path.realpath(b))
 
 
-def atomic_write(path: Path, write: Callable[[BinaryIO], None], *, overwrite: bool) -> None:
+def atomic_write(path: Path, write: Callable[[BinaryIO], object], *, overwrite: bool) -> None:
     """Create or replace ``path`` with what ``write(stream)`` writes, atomically.
 
     overwrite : False refuses (OutputExistsError) a file that appeared since the check.

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from typing import cast
 
 import numpy as np
 
@@ -70,7 +71,7 @@ class _Reader:
         if asset is not None:
             unit = asset.find(self.q("unit"))
             if unit is not None and unit.get("meter"):
-                meter = self._float(unit.get("meter"), "<unit meter>")
+                meter = self._float(cast(str, unit.get("meter")), "<unit meter>")
             axis = asset.find(self.q("up_axis"))
             if axis is not None and axis.text:
                 up = axis.text.strip().upper()

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import BinaryIO, Union
+from typing import BinaryIO, Union, cast
 
 import numpy as np
 
@@ -74,7 +74,9 @@ def write_mesh(
     for file, writer in files:
         if writer is None:  # a registry entry without a writer never passes for_writing
             raise UnknownFormatError(f"{file}: no writer for this format")
-        atomic_write(file, lambda stream, w=writer: w(mesh, stream), overwrite=force)
+        # cast: mypy infers no lambda whose default binds the loop variable
+        write = cast(Callable[[BinaryIO], None], lambda stream, w=writer: w(mesh, stream))
+        atomic_write(file, write, overwrite=force)
 
 
 def mesh_output() -> OutputKind:

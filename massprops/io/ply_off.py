@@ -4,7 +4,7 @@ the PLY header's counts checked against the body before the fallback reads it.""
 from __future__ import annotations
 
 import os
-from typing import BinaryIO
+from typing import Any, BinaryIO, cast
 
 import numpy as np
 
@@ -94,13 +94,14 @@ def check_ply_body(path: str | os.PathLike[str], name: str) -> None:
         if fmt is None or not elements:
             return
         body = head[eol + 1:]
+        found: list[int | None]  # None: an element of unknown size (binary)
         if fmt == "ascii":
             text = (body + f.read()).strip()
             available = text.count(b"\n") + 1 if text else 0
             found = []
             for _, count, _ in elements:
                 found.append(min(count, available))
-                available -= found[-1]
+                available -= cast(int, found[-1])
         else:
             available = os.fstat(f.fileno()).st_size - (eol + 1)
             found = []
@@ -127,7 +128,8 @@ def _count(n: int, element: str) -> str:
 
 def _ply_header(text: str) -> tuple[str | None, list[tuple[str, int, int | None]]]:
     """(format, [(element, count, bytes per element or None with a list property)])."""
-    fmt, elements = None, []
+    fmt: str | None = None
+    elements: list[list[Any]] = []  # [element, count, stride]: the stride grows per property
     for line in text.splitlines():
         words = line.split()
         if len(words) >= 2 and words[0] == "format":

@@ -6,6 +6,7 @@ import itertools
 import os
 import re
 import stat
+from io import BufferedIOBase
 from pathlib import Path
 from typing import BinaryIO
 
@@ -134,7 +135,7 @@ def _read_binary_file(path: Path, name: str) -> Mesh | None:
     return soup
 
 
-def _fill(file: int | BinaryIO, soup: Mesh, start: int, stop: int) -> bool | None:
+def _fill(file: int | BufferedIOBase, soup: Mesh, start: int, stop: int) -> bool | None:
     """Fill triangles start .. stop of ``soup`` from the records of ``file`` (a descriptor read
     with os.preadv, or a file object read in order): the corners widened to float64 and the
     faces ``arange(3m).reshape(m, 3)``. Returns whether every coordinate is finite, or None if the
@@ -146,11 +147,12 @@ def _fill(file: int | BinaryIO, soup: Mesh, start: int, stop: int) -> bool | Non
         hi = min(lo + _BLOCK, stop)
         raw = buffer[: (hi - lo) * _RECORD.itemsize]
         offset = _HEADER_BYTES + _COUNT_BYTES + lo * _RECORD.itemsize
+        # numpy's stubs give ndarray __buffer__ only from Python 3.12 (mypy checks 3.10)
         if isinstance(file, int):
-            got = os.preadv(file, [raw], offset)
+            got = os.preadv(file, [raw], offset)  # type: ignore[list-item]
         else:
             file.seek(offset)
-            got = file.readinto(raw)
+            got = file.readinto(raw)  # type: ignore[arg-type]
         if got != raw.size:
             return None
         block = corners[lo:hi]

@@ -46,7 +46,7 @@ class FaceSums(NamedTuple):
     area: np.ndarray
     lowest: np.ndarray
     highest: np.ndarray
-    count: int
+    count: int  # type: ignore[assignment]  # a field named like tuple.count, on purpose
     accurate: bool
 
 

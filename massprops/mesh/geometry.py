@@ -3,6 +3,8 @@ geometric facts the health check and the repairs read off a mesh. numpy only, no
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 
 from massprops.parallel import in_halves
@@ -28,7 +30,8 @@ def signed_volumes6(vertices: np.ndarray, faces: np.ndarray | None, origin: np.n
             if v9 is not None:
                 c = v9[lo:hi].T.copy()  # (9, c): contiguous rows
             else:
-                c = np.take(vertices, faces[lo:hi], axis=0).reshape(-1, 9).T.copy()
+                rows = cast(np.ndarray, faces)[lo:hi]  # v9 is None only when faces is given
+                c = np.take(vertices, rows, axis=0).reshape(-1, 9).T.copy()
             x0, y0, z0, x1, y1, z1, x2, y2, z2 = c
             x1 -= x0
             y1 -= y0

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -231,7 +231,7 @@ def _count(n: int, noun: str) -> str:
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
-def _percent(part: float, whole: float) -> str:
+def _percent(part: float | np.floating, whole: float) -> str:
     return f"{100 * part / whole:.3g}%" if whole > 0 else "an unbounded share"
 
 
@@ -379,6 +379,7 @@ def _close_cracks(mesh: Mesh, a: _Analysis, *, partial: bool = False
     welded, weld_report = _weld_cracks(mesh, b)
     if welded is None:
         return mesh, a, None, []
+    weld_report = cast(CrackWeld, weld_report)  # given with every welded mesh
     flat = _exactly_flat(welded, _analyse(welded))
     c = _analyse(welded, flat)
     if not fewer_open(c, b):
@@ -405,7 +406,7 @@ def _exactly_flat(mesh: Mesh, a: _Analysis) -> np.ndarray:
     return out
 
 
-def _weld_cracks(mesh: Mesh, a: _Analysis) -> tuple[Mesh | None, CrackWeld | None]:
+def _weld_cracks(mesh: Mesh, a: _Analysis) -> tuple[Mesh, CrackWeld] | tuple[None, None]:
     """The mesh with the positions at its unbalanced edges welded within the round-off tolerance
     (each group onto its first position in file order), or (None, None) if none are that close."""
     bad = a.edges.imbalance != 0
@@ -481,7 +482,8 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
         raise MeshTopologyError(f"{mesh.name}: mesh has no faces; expected a closed surface of "
                                 f"at least 4 triangles; check that the file holds faces")
     a = _analyse(mesh)
-    cracks, crack_notes = None, []
+    cracks: CrackWeld | None = None
+    crack_notes: list[str] = []
     if a.edges.count("open"):
         mesh, a, cracks, crack_notes = _close_cracks(mesh, a)
     if np.count_nonzero(a.used) < 4:

@@ -102,10 +102,11 @@ def sample_windings(vertices: np.ndarray, faces: np.ndarray, tri: np.ndarray,
             p_row.append(probes)
             p_col.append(np.full(probes.size, c))
             p_w.append(winding_numbers(centre[probes], own))
-    return Windings(sample_piece, *(np.concatenate(x) if x else np.empty(0, t)
-                                    for x, t in ((row, np.int64), (col, np.int64), (w, float))),
-                    pair, *(np.concatenate(x) if x else np.empty(0, t)
-                            for x, t in ((p_row, np.int64), (p_col, np.int64), (p_w, float))))
+    row_a, col_a, w_a = (np.concatenate(x) if x else np.empty(0, t)
+                         for x, t in ((row, np.int64), (col, np.int64), (w, float)))
+    p_row_a, p_col_a, p_w_a = (np.concatenate(x) if x else np.empty(0, t)
+                               for x, t in ((p_row, np.int64), (p_col, np.int64), (p_w, float)))
+    return Windings(sample_piece, row_a, col_a, w_a, pair, p_row_a, p_col_a, p_w_a)
 
 
 def _probe_pairs(box_lo: np.ndarray, box_hi: np.ndarray, n_tri: np.ndarray

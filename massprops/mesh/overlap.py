@@ -6,12 +6,16 @@ solid is a repair."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from massprops.mesh.pieces import Pieces, Welded, split_pieces
 from massprops.mesh.value import Mesh
 from massprops.tolerances import BOOLEAN_VOLUME_RTOL
+
+if TYPE_CHECKING:  # imported at run time only when pieces overlap
+    import manifold3d
 
 
 def overlap_warning(mesh: Mesh, volumes: np.ndarray, overlaps: list[tuple[int, int]]) -> str:
@@ -40,7 +44,7 @@ def overlap_warning(mesh: Mesh, volumes: np.ndarray, overlaps: list[tuple[int, i
 # --- the boolean ----------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class Composed:
-    result: object  # manifold3d.Manifold
+    result: manifold3d.Manifold
     solids: list[int]
     cavities: list[int]
     skipped: list[int]

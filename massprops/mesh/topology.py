@@ -166,7 +166,7 @@ def connected_components(n: int, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     until every node points at a root; edges inside one tree are dropped each round. Labels only
     decrease, so no cycle forms; meshes with ids in file order settle in a handful of rounds.
     """
-    parent = np.arange(n, dtype=id_dtype(n))
+    parent: np.ndarray = np.arange(n, dtype=id_dtype(n))
     # np.minimum.at has a fast loop only for values of the array's own dtype
     u, v = u.astype(parent.dtype, copy=False), v.astype(parent.dtype, copy=False)
     blocks = range(0, u.size, _CHUNK)

@@ -104,7 +104,7 @@ def _first_use_ids(order: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, n
     """
     n = order.size
     firsts = np.compress(starts, order)  # ties sort by file index: a run's first is its first use
-    inv = np.zeros(n, id_dtype(n))  # first as scratch: 1 + the rank of each first use
+    inv: np.ndarray = np.zeros(n, id_dtype(n))  # first as scratch: 1 + the rank of each first use
     inv[firsts] = 1
     np.cumsum(inv, out=inv)
     new_id = inv[firsts]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import cast
 
 from massprops.mesh import Mesh
 from massprops.mesh.health import MeshHealth, check_mesh, close_cracks, prepare_mesh
@@ -86,7 +87,8 @@ def repair_and_integrate(mesh: Mesh, options: RepairOptions, *, density: float |
         # deferred: each repair loads only when asked for
         from massprops.repair.union import finished
 
-        volume = united if options.shell is not None else props.volume
+        # a union with a shell: united was measured (options.union)
+        volume = cast(float, united) if options.shell is not None else props.volume
         records["union"] = finished(union.record, volume)
         warnings += union.warnings
     health = dataclasses.replace(health, warnings=tuple(crack_notes + warnings))

@@ -81,7 +81,7 @@ def ear_clip(xy: np.ndarray) -> np.ndarray | None:
     again and again, a convex corner whose triangle holds no other remaining vertex. None if no
     ear is found (the outline was not simple after all)."""
     left = list(range(xy.shape[0]))
-    out = []
+    out: list[tuple[int, ...]] = []
     while len(left) > 3:
         n = len(left)
         idx = np.array(left)

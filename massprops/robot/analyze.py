@@ -11,6 +11,7 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -94,12 +95,14 @@ class LinkReport:
         geometry made it) and, where a repair changed a mesh, "repairs" (mesh -> record)."""
         s = self.link.stated
         valid = self.stated_validity()
+        # stated_validity and computed_validity are None only when nothing is stated / computed
         stated = None if s is None else {
             "mass": s.mass, "center_of_mass": s.center_of_mass.tolist(),
-            "inertia": s.inertia.tolist(), "valid": valid.ok}
+            "inertia": s.inertia.tolist(), "valid": cast(Validity, valid).ok}
         computed = None
         if self.computed is not None:
-            computed = {**self.computed.as_dict(), "valid": self.computed_validity().as_dict()}
+            computed = {**self.computed.as_dict(),
+                        "valid": cast(Validity, self.computed_validity()).as_dict()}
         return {"model": model, "link": self.name, "line": self.link.node.line,
                 "status": self.status, "reason": self.reason, "stated": stated,
                 **({"valid": valid.as_dict()} if valid is not None else {}),
@@ -166,7 +169,7 @@ class ModelReport:
         keep = WRITE_KEEP_RTOL if rtol is None else rtol
         chosen = []
         for r in self.links:
-            if r.computed is None or not r.computed_validity().ok:
+            if r.computed is None or not cast(Validity, r.computed_validity()).ok:
                 continue
             invalid = bool(r.stated_problems())
             if only_invalid:
@@ -209,7 +212,7 @@ class ModelReport:
 def _written(r: LinkReport, keep_mass: bool) -> LinkMass:
     """What ``--write`` puts in link ``r``: the computed inertial, or with ``keep_mass`` the
     stated mass and the computed distribution (COM as computed, tensor × m_stated / m)."""
-    c, s = r.computed, r.link.stated
+    c, s = cast(LinkMass, r.computed), r.link.stated  # to_rewrite chose computed links only
     if not keep_mass or s is None or not (s.mass > 0) or s.mass == c.mass:
         return c
     f = s.mass / c.mass
@@ -235,7 +238,7 @@ class Rewrite:
             return cls(r.name, "none stated: added", (None, w.mass), None, None)
         problems = r.stated_problems()
         why = (f"invalid ({problems[0]})" if problems else
-               f"off by {r.comparison.worst:.3g} (> {rtol:g})")
+               f"off by {cast(Comparison, r.comparison).worst:.3g} (> {rtol:g})")
         return cls(r.name, why, (s.mass, w.mass),
                    float(np.linalg.norm(w.center_of_mass - s.center_of_mass)),
                    float(np.linalg.norm(w.inertia - s.inertia, 2) / np.linalg.norm(w.inertia, 2)))

@@ -87,7 +87,8 @@ def digest() -> str:
 
 def planned_root() -> Path:
     """The folder the kernels will cache in (nothing is created; see the module doc)."""
-    base = config.CACHE_DIR or os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    base = (getattr(config, "CACHE_DIR", None) or os.environ.get("XDG_CACHE_HOME")
+            or Path.home() / ".cache")  # CACHE_DIR: numba's config sets it at import
     return Path(base) / "massprops" / f"numba-{digest()}"
 
 

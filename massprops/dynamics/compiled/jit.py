@@ -83,9 +83,9 @@ array_kernel = _cached_njit(nogil=True, **COMPILED_OPTIONS)
 
 def _register() -> None:
     for fn in (forces.quat_matrix, forces.force_torque, forces.rhs, *_elementwise.FUNCTIONS):
-        register_jitable(**COMPILED_OPTIONS)(fn)
+        register_jitable(**COMPILED_OPTIONS)(fn)  # type: ignore[type-var]  # numba's stub: any callable
     for generic, scalar in _elementwise.SCALAR_FORMS.items():
-        overload(generic, jit_options=COMPILED_OPTIONS, strict=False)(
+        overload(generic, jit_options=COMPILED_OPTIONS, strict=False)(  # type: ignore[arg-type]
             lambda *args, _scalar=scalar: _scalar)
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import cast
 
 import numpy as np
 
@@ -172,29 +173,31 @@ def consistent_initial(hold: Hold, body: RigidBody, initial: InitialState,
     to_world = quat_to_matrix(q)
     w_world = to_world @ omega if initial.angular_velocity_frame == "body" else omega
     if hold.kind == "revolute":
-        turned = to_world @ hold.axis
-        if hold.world_axis is None:
-            hold = replace(hold, world_axis=turned / np.linalg.norm(turned))
-        angle = math.atan2(float(np.linalg.norm(np.cross(turned, hold.world_axis))),
-                           float(turned @ hold.world_axis))
-        q_new = quat_normalize(quat_multiply(_turn(turned, hold.world_axis), q))
+        turned = to_world @ cast(np.ndarray, hold.axis)  # a hinge always has its axis
+        world_axis = hold.world_axis
+        if world_axis is None:
+            world_axis = turned / np.linalg.norm(turned)
+            hold = replace(hold, world_axis=world_axis)
+        angle = math.atan2(float(np.linalg.norm(np.cross(turned, world_axis))),
+                           float(turned @ world_axis))
+        q_new = quat_normalize(quat_multiply(_turn(turned, world_axis), q))
         if angle > JOINT_RTOL:
             deviations.append(Deviation(
                 "orientation", angle, "rad", q_new.tolist(),
                 f"the orientation must turn the hinge axis {_fmt(hold.axis)} (body) onto the "
-                f"world axis {_fmt(hold.world_axis)}"))
+                f"world axis {_fmt(world_axis)}"))
         q = q_new
         to_world = quat_to_matrix(q)
         if initial.angular_velocity_frame == "body":
             w_world = to_world @ omega
-        along = float(w_world @ hold.world_axis) * hold.world_axis
+        along = float(w_world @ world_axis) * world_axis
         across = float(np.linalg.norm(w_world - along))
         scale = max(float(np.linalg.norm(w_world)), 1.0 / duration)
         new = along if initial.angular_velocity_frame == "world" else to_world.T @ along
         if across > JOINT_RTOL * scale:
             deviations.append(Deviation(
                 "angular_velocity", across, "rad/s", new.tolist(),
-                f"a hinge turns the body only about {_fmt(hold.world_axis)} (world), so the "
+                f"a hinge turns the body only about {_fmt(world_axis)} (world), so the "
                 "angular velocity must lie along it"))
         omega, w_world = new, along
     com = np.asarray(body.center_of_mass, np.float64)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import weakref
+from typing import cast
 
 import numpy as np
 
@@ -117,8 +118,9 @@ def _build(scene: Scene) -> JointModel:
     if hold.kind == "spherical":
         moments, axes = principal_axes(j_point)
     else:
-        axes = _frame_with_z(hold.axis)
-        i_axis = float(hold.axis @ j_point @ hold.axis)
+        axis = cast(np.ndarray, hold.axis)  # a hinge's
+        axes = _frame_with_z(axis)
+        i_axis = float(axis @ j_point @ axis)
         moments = np.full(3, i_axis)
     moments = np.array(moments, dtype=np.float64)
     moments.setflags(write=False)
@@ -160,7 +162,7 @@ def _joint_terms(hold: Hold) -> tuple:
     if hold.damping:
         terms.append(Drag(angular=hold.damping))
     if hold.torque:
-        vec = np.array(hold.torque * hold.axis)
+        vec = np.array(hold.torque * cast(np.ndarray, hold.axis))  # only a hinge is driven
         vec.setflags(write=False)
         terms.append(Torque(vec, "body", hold.start, hold.end))
     return tuple(terms)
@@ -202,7 +204,7 @@ def _initial_state(scene: Scene, hold: Hold, pinned: RigidBody) -> np.ndarray:
     w_world = to_world @ ini.angular_velocity if ini.angular_velocity_frame == "body" \
         else np.asarray(ini.angular_velocity, np.float64)
     if hold.kind == "revolute":
-        w_e = np.array([0.0, 0.0, float(w_world @ hold.world_axis)])
+        w_e = np.array([0.0, 0.0, float(w_world @ cast(np.ndarray, hold.world_axis))])
     else:
         w_e = quat_to_matrix(q_e).T @ w_world
     return np.concatenate([hold.anchor, np.zeros(3), q_e, w_e])
@@ -222,7 +224,7 @@ def _only_gravity(scene: Scene) -> np.ndarray | None:
     """The total field (m/s², world) when gravity is the only force, else None."""
     if not scene.forces or not all(isinstance(f, Gravity) for f in scene.forces):
         return None
-    g = np.sum([np.asarray(f.g) for f in scene.forces], axis=0)
+    g = np.sum([np.asarray(cast(Gravity, f).g) for f in scene.forces], axis=0)
     return g if np.any(g != 0) else None
 
 

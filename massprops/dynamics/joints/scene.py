@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable
+from typing import Any, cast
 
 import yaml
 
@@ -35,14 +36,14 @@ __all__ = ["JOINT_TYPES", "bind_scene", "parse_joints"]
 INITIAL_KEYS = ("position", "orientation", "velocity", "angular_velocity")
 
 
-def _spherical(fields: dict[str, Field]) -> dict[str, object]:
-    out: dict[str, object] = {"anchor": read_vector(fields["anchor"])}
+def _spherical(fields: dict[str, Field]) -> dict[str, Any]:
+    out: dict[str, Any] = {"anchor": read_vector(fields["anchor"])}
     if "point" in fields:
         out["point"] = read_vector(fields["point"])
     return out
 
 
-def _revolute(fields: dict[str, Field]) -> dict[str, object]:
+def _revolute(fields: dict[str, Field]) -> dict[str, Any]:
     out = _spherical(fields)
     out["axis"] = read_direction(fields["axis"])
     if "world_axis" in fields:
@@ -54,14 +55,15 @@ def _revolute(fields: dict[str, Field]) -> dict[str, object]:
     start = read_number(fields["start"]) if "start" in fields else -math.inf
     end = read_number(fields["end"]) if "end" in fields else math.inf
     if start >= end:
-        where = fields.get("end", fields.get("start"))
+        # one of the two is given: start < end holds for both bounds infinite
+        where = cast(Field, fields.get("end", fields.get("start")))
         raise where.error(f"expected start < end, got start {start!r} and end {end!r}")
     out["start"], out["end"] = start, end
     return out
 
 
 JOINT_TYPES: dict[str, tuple[type, tuple[str, ...], dict[str, str],
-                             Callable[[dict[str, Field]], dict[str, object]]]] = {
+                             Callable[[dict[str, Field]], dict[str, Any]]]] = {
     "spherical": (SphericalJoint, ("type", "point", "anchor"),
                   {"anchor": "anchor: [0, 0, 0]"}, _spherical),
     "revolute": (RevoluteJoint, ("type", "point", "axis", "anchor", "world_axis", "damping",
@@ -74,7 +76,7 @@ JOINT_TYPES: dict[str, tuple[type, tuple[str, ...], dict[str, str],
 def parse_joints(field: Field | None) -> tuple[tuple[Joint, ...], list[dict[str, Field]]]:
     """The joints of the ``joints:`` list (absent or empty: none) and, per joint, its key
     fields (for messages about a joint found wrong later)."""
-    if is_null(field):
+    if field is None or is_null(field):
         return (), []
     if not isinstance(field.node, yaml.SequenceNode):
         raise field.error("expected a list of joints, one '- {type: spherical, anchor: "

@@ -127,7 +127,7 @@ def _tree_path(scene: SystemScene, used: set, a: int, b: int) -> list[int]:
         j = scene.joints[k]
         links.setdefault(j.a, []).append((k, j.b))
         links.setdefault(j.b, []).append((k, j.a))
-    came = {a: None}
+    came: dict[int, tuple[int, int] | None] = {a: None}
     todo = [a]
     while todo and b not in came:
         node = todo.pop()
@@ -136,8 +136,8 @@ def _tree_path(scene: SystemScene, used: set, a: int, b: int) -> list[int]:
                 came[other] = (k, node)
                 todo.append(other)
     path, node = [], b
-    while came.get(node) is not None:
-        k, node = came[node]
+    while (step := came.get(node)) is not None:
+        k, node = step
         path.append(k)
     return path
 
@@ -241,7 +241,11 @@ def _parents_first(joints: list[TreeJoint]) -> list[TreeJoint]:
     while pending:
         rest = []
         for j in pending:
-            (out.append(j), done.add(j.child)) if j.parent in done else rest.append(j)
+            if j.parent in done:
+                out.append(j)
+                done.add(j.child)
+            else:
+                rest.append(j)
         pending = rest
     return out
 
@@ -257,7 +261,8 @@ def initial_coordinates(scene: SystemScene, tree: Tree, notes: list[str] | None 
     quaternion is normalised, and said in ``notes`` where its norm misses 1 by more than
     QUATERNION_UNIT_RTOL (as a scene's orientations are, `dynamics.scene`)."""
     q, u = np.zeros(tree.nq), np.zeros(tree.nv)
-    fixed_q, fixed_u = set(), set()
+    fixed_q: set[int] = set()
+    fixed_u: set[int] = set()
     for j in tree.joints:
         if j.kind in ("spherical", "free"):
             q[j.iq + (3 if j.kind == "free" else 0)] = 1.0

@@ -18,7 +18,9 @@ the tree coordinates.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -128,7 +130,7 @@ def _point(kin, body: int, local: np.ndarray):
 
 
 def terms(prims: list[Primitive], kin, jac: np.ndarray, nv: int, size: float,
-          couplings: list[Coupling] = (), q: np.ndarray | None = None):
+          couplings: Sequence[Coupling] = (), q: np.ndarray | None = None):
     """Φ (m,), G (m, nv), Φ̈ at the kinematics' accelerations (m,), and the spatial-force rows
     on b and on a (m, 6 each) for the reactions. ``kin`` must hold accelerations at u̇ = 0
     for the bias. The ``couplings``' rows (at the coordinates ``q``) come last."""
@@ -183,6 +185,7 @@ def terms(prims: list[Primitive], kin, jac: np.ndarray, nv: int, size: float,
             if p.a != WORLD:
                 g[r + k] += rho_a[r + k] @ jac[p.a]
         r += p.rows
+    q = cast(np.ndarray, q)  # given wherever there are couplings
     for c in couplings:
         phi[r], gdot[r] = 0.0, 0.0
         for k, (iq, iu, coef) in enumerate(c.terms):

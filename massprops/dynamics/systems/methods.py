@@ -10,6 +10,7 @@ contract's metric over all bodies (`outputs.distance`).
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 
@@ -82,7 +83,7 @@ def kernels(name: str, scene=None) -> list[str]:
     if name == "auto":
         return ["dop853", "outputs", *(["rhs"] if scene is not None and _sprung(scene) else [])]
     spec = INTEGRATORS[name]
-    return [spec.kernel, "outputs", *(["rhs"] if spec.kind == "fixed" else []),
+    return [cast(str, spec.kernel), "outputs", *(["rhs"] if spec.kind == "fixed" else []),
             *(["dop853"] if spec.stiff else [])]
 
 
@@ -131,8 +132,11 @@ class Companions:
         def runs(report) -> list:
             out = []
             for k, other in enumerate(settings):
-                run = integrate(system, y0, t_out, other, floors, windows, limit, name,
-                                lambda f, k=k: report((k + f) / len(settings)), watch)
+                def part(f: float, k: int = k) -> None:
+                    report((k + f) / len(settings))
+
+                run = integrate(system, y0, t_out, other, floors, windows, limit, name, part,
+                                watch)
                 out.append(run)
                 if run.interrupted or run.failure is not None:
                     break  # the next could add nothing

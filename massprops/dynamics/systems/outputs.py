@@ -157,7 +157,9 @@ def _joint_states(system, y: np.ndarray, rotation: np.ndarray, com: np.ndarray,
             else:  # a cut ball or universal joint, sample by sample
                 c, r = np.zeros((n, _ncoord(sj.kind))), np.zeros((n, _nrate(sj.kind)))
                 for s in range(n):
-                    kin = tr.Kinematics(rotation[s], com[s], spatial[s], None, None, [], [])
+                    # poses and motions only: what a cut joint's state is measured from
+                    kin = tr.Kinematics(rotation[s], com[s], spatial[s], np.empty((0, 6)),
+                                        np.empty((0, 6, 6)), [], [])
                     c[s], r[s] = cutjoint.from_poses(tree, kin, sj)
         if where == "cut" and sj.kind in ("revolute", "cylindrical", "universal"):
             for col in ([0] if sj.kind != "universal" else [0, 1]):  # measured: continuous

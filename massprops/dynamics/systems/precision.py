@@ -129,6 +129,7 @@ def reference_run(scene: SystemScene, every: float, start: tuple, notice=None):
     duration = scene.time.duration
     pilot = dataclasses.replace(scene, time=dataclasses.replace(
         scene.time, duration=duration / PILOT_SHARE))
+    pace: float
     try:
         pace = PILOT_SHARE * simulate_system(
             pilot, integrator=method, rtol=fine, step=fine, every=duration, estimate=False,
@@ -136,7 +137,7 @@ def reference_run(scene: SystemScene, every: float, start: tuple, notice=None):
     except RunBudgetError:
         pace = math.inf
     except ComputationError:
-        pace = 0  # the run itself says what went wrong, in its own words, below
+        pace = 0.0  # the run itself says what went wrong, in its own words, below
     if pace > MAX_REFERENCE_STEPS:
         raise ComputationError(refused.replace(
             " steps:", f" steps (the pace of its first {duration / PILOT_SHARE:.3g} s):", 1))

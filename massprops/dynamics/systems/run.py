@@ -9,6 +9,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -287,7 +288,7 @@ def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, star
             raise
     conservative = system.conservative()
     samples = evaluate(system, t_out, run.y_out, energy if conservative else None)
-    residual = samples.residual
+    residual = cast(np.ndarray, samples.residual)  # every evaluation measures it
     diagnostics = {
         "energy_rel_drift": None, "error_estimate": None,
         "constraint_residual": {"position": float(residual[:, 0].max()),
@@ -301,7 +302,7 @@ def _finish(scene, system, y0, t_out, name, setting, reason, floors, limit, star
                       "unique; the smallest set of loop forces is reported"),
     }
     if conservative:
-        e = samples.energy
+        e = cast(np.ndarray, samples.energy)  # asked for: the system conserves energy
         scale = max(abs(e[0]), _energy_scale(system), 1e-300)
         diagnostics["energy_rel_drift"] = float(np.max(np.abs(e - e[0])) / scale)
     if system.nv == system.rank and system.m:
@@ -370,12 +371,13 @@ def _static(system: System, y0: np.ndarray, notes: list[str]) -> SystemResult:
     numpy outputs, without loading the compiled kernel)."""
     samples = reference(system, np.zeros(1), y0[None, :])
     pos, vel = system.residual(y0)
+    rank = cast(int, system.rank)  # found by `prepare`
     diagnostics = {"energy_rel_drift": None, "error_estimate": None,
                    "constraint_residual": {"position": pos, "velocity": vel},
-                   "degrees_of_freedom": system.nv - system.rank,
-                   "redundant_constraints": system.m - system.rank,
+                   "degrees_of_freedom": system.nv - rank,
+                   "redundant_constraints": system.m - rank,
                    "projection": {"position": 0.0, "velocity": 0.0},
-                   "singularity_margin": None, "reactions": "unique" if system.m == system.rank
+                   "singularity_margin": None, "reactions": "unique" if system.m == rank
                    else "minimum-norm multipliers"}
     held = _holding(system, y0, notes)
     return SystemResult(samples, 0, 1, 0, 0.0, diagnostics, system.scene, tuple(notes), held)

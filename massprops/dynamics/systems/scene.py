@@ -104,7 +104,9 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
     initial = _initial(fields.get("initial"), index, {j.name for j in joints}, places)
     time = system_time(fields["time"])
     output = _output(fields.get("output"), base_dir)
-    bodies, inputs, warnings = [], [], []
+    bodies: list[SystemBody] = []
+    inputs: list[Path] = []
+    warnings: list[str] = []
     for name, (spec, placement) in zip(names, specs):
         if isinstance(spec, _MeshBodySpec):
             body, said = _mesh_body(spec)
@@ -240,7 +242,7 @@ def _two_axes(field: Field) -> np.ndarray:
 
 
 def _joints(field: Field | None, index: dict, places: dict) -> tuple[SystemJoint, ...]:
-    if is_null(field):
+    if field is None or is_null(field):
         return ()
     if not isinstance(field.node, yaml.SequenceNode):
         raise field.error(f"expected a list of joints, got {shown(field.node)}")
@@ -298,7 +300,7 @@ def _forces(field: Field | None, index: dict):
     forces: list[BodyForce] = []
     springs: list[BodySpring] = []
     drags: list[BodyDrag] = []
-    if is_null(field):
+    if field is None or is_null(field):
         return gravity, (), (), ()
     if not isinstance(field.node, yaml.SequenceNode):
         raise field.error(f"expected a list of forces, got {shown(field.node)}")

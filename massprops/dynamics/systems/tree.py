@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -244,11 +245,11 @@ def with_accelerations(tree, kin: Kinematics, udot: np.ndarray) -> Kinematics:
     """``kin`` (made at u̇ = 0) with every body's A at the accelerations ``udot``: the same sums
     as `kinematics` with ``udot`` (the same numbers), without recomputing poses, velocities and
     inertias (a third of a sample's outputs on a large system)."""
-    A = np.zeros_like(kin.A)
+    A, bias = np.zeros_like(kin.A), cast(np.ndarray, kin.bias)  # `kinematics` filled it
     for n, j in enumerate(tree.joints):
         ap = np.zeros(6) if j.parent == WORLD else A[j.parent]
         s = kin.S[n]
-        A[j.child] = ap + kin.bias[j.child] + (s @ udot[j.iu:j.iu + j.nv] if s.shape[1]
+        A[j.child] = ap + bias[j.child] + (s @ udot[j.iu:j.iu + j.nv] if s.shape[1]
                                                else 0.0)
     return dataclasses.replace(kin, A=A)
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -50,8 +51,10 @@ def diagnose(stated, computed, shapes: Callable[[], Sequence[Base]] | None = Non
     explains nothing (called at most once); ``difference`` is `compare.relative_difference`."""
     size = computed.size
     bases: list[Base] = [((), computed.mass, computed.center_of_mass, computed.inertia)]
-    direct = difference(stated.mass, stated.center_of_mass, stated.inertia, computed.mass,
-                        computed.center_of_mass, computed.inertia, size)
+    # the callers always pass difference
+    direct = cast(Callable, difference)(stated.mass, stated.center_of_mass, stated.inertia,
+                                        computed.mass, computed.center_of_mass, computed.inertia,
+                                        size)
     if direct <= DIAGNOSIS_RTOL:
         return Diagnosis((), direct, f"differs by {direct:.3g}: within the doctor's allowance "
                          f"({DIAGNOSIS_RTOL:g}, the rounding of printed numbers); no cause named")
@@ -87,7 +90,7 @@ def _search(stated, bases: Sequence[Base], size: float, difference) -> tuple:
     for base_causes, m, com, j in bases:
         for unit_causes, jm, mm, cm in UNITS:
             target = stated.inertia / jm
-            models = [((), j, [com])]
+            models: list[tuple[tuple, np.ndarray, list[np.ndarray]]] = [((), j, [com])]
             models += [((c,), jj, coms) for c, jj, coms in
                        about_point(target, j, m, com, s_com / cm)]
             models += [((c,), jj, coms) for c, jj, coms in rotation(target, j, com,

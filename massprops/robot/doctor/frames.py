@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from typing import cast
 
 import numpy as np
 
@@ -54,7 +55,8 @@ def about_point(target: np.ndarray, inertia: np.ndarray, mass: float, com: np.nd
     d = math.sqrt(values[2]) * vectors[:, 2]
     points = [com + d, com - d]
     near_stated = [np.linalg.norm(p - stated_com) for p in points]
-    if min(near_stated) <= 1e-9 * max(np.linalg.norm(d), 1e-300):
+    # cast: max of a numpy float and a float has no common type in the stubs
+    if min(near_stated) <= 1e-9 * cast(float, max(np.linalg.norm(d), 1e-300)):
         p = points[int(np.argmin(near_stated))]
         where = "the inertial frame's origin"
     else:

@@ -18,6 +18,8 @@ not tried.
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 
 from massprops.errors import MassPropsError
@@ -87,11 +89,11 @@ def alternative_part(kind: str, geom, part: Part, meshes) -> Part | None:
 def shape_bases(geometries, parts, meshes, split) -> list:
     """`diagnose.Base` for each kind of SHAPES that changes the link: the geometries' parts
     recomputed, put together with ``split(parts) -> (masses, total)`` as the link was."""
-    out = []
+    out: list[tuple] = []
     for kind, what in SHAPES.items():
         alt = [alternative_part(kind, g, p, meshes) for g, p in zip(geometries, parts)]
         if any(a is None for a in alt) or all(a is p for a, p in zip(alt, parts)):
             continue
-        link = combine(alt, *split(alt))
+        link = combine(cast(list[Part], alt), *split(alt))  # no None left (see above)
         out.append((((kind, {}, what),), link.mass, link.center_of_mass, link.inertia))
     return out

@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 
@@ -304,7 +305,7 @@ class _Walker:
         size = v.numbers(node, a["size"], "size=", (1, 2, 3), 'size="0.1 0.2 0.3"') \
             if "size" in a else np.zeros(0)
         pose = _pose(a, node, compiler, v)
-        common = {"node": node, "density": density, "mass": mass}
+        common: dict[str, Any] = {"node": node, "density": density, "mass": mass}
         if "fromto" in a and kind in ("capsule", "cylinder", "box", "ellipsoid"):
             ends = v.numbers(node, a["fromto"], "fromto=", 6, 'fromto="0 0 0 0 0 1"')
             length = float(np.linalg.norm(ends[3:] - ends[:3]))
@@ -398,7 +399,7 @@ def _stated(node: Node, compiler: _Compiler, v: Values) -> StatedInertial:
     if "mass" not in node.attrs or "pos" not in node.attrs:
         raise v.error(node, "an <inertial> needs pos= and mass=")
     rotation, pos = _pose(node.attrs, node, compiler, v)
-    mass = v.number(node, "mass")
+    mass = cast(float, v.number(node, "mass"))  # mass= is there (checked above)
     if "fullinertia" in node.attrs:
         f = v.numbers(node, node.attrs["fullinertia"], "fullinertia=", 6,
                       'fullinertia="Ixx Iyy Izz Ixy Ixz Iyz"')
@@ -421,7 +422,7 @@ def _meshes(root: Node, defaults: _Defaults, compiler: _Compiler, v: Values, pat
             name = a.get("name") or Path(file).stem
             scale = v.numbers(node, a["scale"], "scale=", 3, 'scale="1 1 1"') if "scale" in a \
                 else np.ones(3)
-            entry = {"uri": file, "scale": scale, "path": None, "problem": None,
+            entry: dict[str, Any] = {"uri": file, "scale": scale, "path": None, "problem": None,
                      "vertices": None, "faces": None, "inertia": a.get("inertia", "legacy")}
             if "vertex" in a:
                 counts = [len(a[k].split()) for k in ("vertex", "face") if k in a]

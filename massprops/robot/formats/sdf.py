@@ -20,6 +20,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 
@@ -163,9 +164,9 @@ class _FrameGraph:
             return local
         try:
             frame = self.in_model(relative_to)
-        except KeyError:
-            raise self.v.error(element.find("pose"), f"relative_to={relative_to!r}: no such "
-                               "frame in this model") from None
+        except KeyError:  # relative_to came from its <pose>
+            raise self.v.error(cast(Node, element.find("pose")), f"relative_to={relative_to!r}: "
+                               "no such frame in this model") from None
         return _compose(_inverse(self.in_model(link)), _compose(frame, local))
 
 
@@ -192,9 +193,9 @@ def _stated(node: Node, v: Values, warnings: list[str]) -> StatedInertial | None
                         "given), and so does massprops; nothing stated to compare")
         return None
     (rotation, xyz), relative_to = pose_of(node, v)
-    if relative_to:
-        raise v.error(node.find("pose"), "an inertial pose is always in the link frame; "
-                                         "remove relative_to")
+    if relative_to:  # read from its <pose>
+        raise v.error(cast(Node, node.find("pose")), "an inertial pose is always in the link "
+                                                     "frame; remove relative_to")
     mass_el = node.find("mass")
     defaulted = []
     mass = 1.0
@@ -225,7 +226,7 @@ def _geometry(element: Node, link: str, frames: _FrameGraph, v: Values, path: Pa
     shape = None if geometry is None else next(iter(geometry.children), None)
     if shape is None:
         raise v.error(element, "expected a <geometry> with one shape inside")
-    common = {"node": shape, "rotation": rotation, "translation": xyz}
+    common: dict[str, Any] = {"node": shape, "rotation": rotation, "translation": xyz}
     tag = shape.tag
 
     def length(name: str) -> float:
@@ -262,8 +263,8 @@ def _geometry(element: Node, link: str, frames: _FrameGraph, v: Values, path: Pa
         origin = shape.file or path   # a mesh of an included model: relative to its file
         resolved, problem = resolve_uri(uri, origin.parent, origin, package_paths)
         if shape.find("submesh") is not None:
-            problem = (f"<submesh> (line {shape.find('submesh').line}) is not supported; "
-                       "export the submesh to its own file")
+            problem = (f"<submesh> (line {cast(Node, shape.find('submesh')).line}) is not "
+                       "supported; export the submesh to its own file")
         return Geometry("mesh", path=resolved, uri=uri, scale=scale, problem=problem, **common)
     if tag in ("plane", "heightmap", "empty"):
         warnings.append(f"<{tag}> (line {shape.line}) has no finite volume; ignored")

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import cast
 
 from massprops.errors import RobotModelError, setting_ref
 from massprops.robot.formats.uris import resolve_uri
@@ -41,7 +42,7 @@ def expand_sdf_includes(root: Node, path: Path, package_paths: Sequence[Path],
         target, problem = resolve_uri(uri, where.parent, where, package_paths)
         if problem:
             raise RobotModelError(f"{where}:{node.line}: <include>: {problem}")
-        file = _model_file(target, where, node, uri)
+        file = _model_file(cast(Path, target), where, node, uri)  # no problem: a path
         sub, _ = parse_xml(file)
         expand_sdf_includes(sub, file, package_paths, _depth + 1)
         model = next(sub.iter("model"), None)

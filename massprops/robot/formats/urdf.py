@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 
@@ -70,7 +71,7 @@ def _stated(node: Node, v: Values) -> StatedInertial:
                             "<inertial> (massprops model --write fills it in)")
     if inertia_el is None:
         raise v.error(node, "an <inertial> needs <inertia ixx= ixy= ixz= iyy= iyz= izz=/>")
-    mass = v.number(mass_el, "value")
+    mass = cast(float, v.number(mass_el, "value"))  # value= is there (checked above)
     k = {}
     for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
         if key not in inertia_el.attrs:
@@ -90,7 +91,7 @@ def _geometry(element: Node, v: Values, path: Path, package_paths: Sequence[Path
         raise v.error(element, "expected a <geometry> with one shape (box, cylinder, sphere, "
                                "mesh) inside")
     tag = shape.tag.removeprefix("drake:")
-    common = {"node": shape, "rotation": rotation, "translation": xyz}
+    common: dict[str, Any] = {"node": shape, "rotation": rotation, "translation": xyz}
     if tag == "box":
         return Geometry("box", dims=_dims(v, shape, ("size",), 3), **common)
     if tag == "sphere":
@@ -147,9 +148,9 @@ def _check_tree(root: Node, links: set[str], v: Values) -> None:
             name = None if el is None else el.attrs.get("link")
             if not name:
                 raise v.error(joint, f'a joint needs <{end} link="..."/>')
-            if name not in links:
-                raise v.error(el, f"joint {joint.attrs.get('name', '?')!r}: no link named "
-                                  f"{name!r}; check the spelling")
+            if name not in links:  # a name: el is there
+                raise v.error(cast(Node, el), f"joint {joint.attrs.get('name', '?')!r}: no "
+                                              f"link named {name!r}; check the spelling")
             ends[end] = name
         child = ends["child"]
         if child in parent_of:

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
+from typing import overload
 
 import numpy as np
 
@@ -37,6 +39,15 @@ class Values:
                                    f"write e.g. {example}")
         return np.array(values, dtype=np.float64)
 
+    # with a default the readers never return None: the overloads let mypy see that
+    @overload
+    def attr(self, node: Node, name: str, count: int | tuple[int, ...], default: None = None,
+             example: str | None = None) -> np.ndarray | None: ...
+
+    @overload
+    def attr(self, node: Node, name: str, count: int | tuple[int, ...],
+             default: Sequence[float], example: str | None = None) -> np.ndarray: ...
+
     def attr(self, node: Node, name: str, count: int | tuple[int, ...], default=None,
              example: str | None = None) -> np.ndarray | None:
         """Attribute ``name`` as numbers; ``default`` (returned as an array) when absent."""
@@ -46,6 +57,12 @@ class Values:
         return self.numbers(node, node.attrs[name], f"{name}=", count,
                             example or f'{name}="{" ".join(["0"] * n)}"')
 
+    @overload
+    def number(self, node: Node, name: str, default: None = None) -> float | None: ...
+
+    @overload
+    def number(self, node: Node, name: str, default: float) -> float: ...
+
     def number(self, node: Node, name: str, default: float | None = None) -> float | None:
         v = self.attr(node, name, 1, None if default is None else [default],
                       example=f'{name}="1.0"')
@@ -54,6 +71,14 @@ class Values:
     def text(self, node: Node, count: int | tuple[int, ...], example: str) -> np.ndarray:
         """The numbers in the element's text (SDF style: ``<size>1 2 3</size>``)."""
         return self.numbers(node, node.text, "its text", count, example)
+
+    @overload
+    def child_text(self, node: Node, tag: str, count: int | tuple[int, ...],
+                   default: None = None, example: str = "") -> np.ndarray | None: ...
+
+    @overload
+    def child_text(self, node: Node, tag: str, count: int | tuple[int, ...],
+                   default: Sequence[float], example: str = "") -> np.ndarray: ...
 
     def child_text(self, node: Node, tag: str, count: int | tuple[int, ...], default=None,
                    example: str = "") -> np.ndarray | None:

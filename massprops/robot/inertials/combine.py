@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -129,8 +130,8 @@ class MeshCache:
         elif geom.vertices is not None:
             mesh = Mesh(np.ascontiguousarray(geom.vertices, dtype=np.float64),
                         np.ascontiguousarray(geom.faces, dtype=np.int64), name=geom.uri)
-        else:
-            mesh = read_mesh(Path(geom.path), name=str(geom.path))
+        else:  # a mesh file: resolved, since an unresolved one is skipped (Geometry.problem)
+            mesh = read_mesh(Path(cast(Path, geom.path)), name=str(geom.path))
         scale = np.asarray(geom.scale, dtype=np.float64)
         if not np.all(scale != 0):
             raise DegenerateMeshError(f"{mesh.name}: scale {scale.tolist()} flattens the mesh; "

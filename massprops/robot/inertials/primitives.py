@@ -13,6 +13,7 @@ parsers translate each format's convention (MJCF half-sizes, half-lengths, fromt
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -134,6 +135,7 @@ def cone(radius: float, length: float) -> Solid:
     return Solid("cone", (radius, length), v, _diagonal(jxx, jxx, 3 * v * r2 / 10))
 
 
-PRIMITIVES = {"box": box, "sphere": sphere, "ellipsoid": ellipsoid, "cylinder": cylinder,
-              "capsule": capsule, "cone": cone}
+PRIMITIVES: dict[str, Callable[..., Solid]] = {
+    "box": box, "sphere": sphere, "ellipsoid": ellipsoid, "cylinder": cylinder,
+    "capsule": capsule, "cone": cone}
 """kind -> constructor, each taking the dims of ``Solid.dims`` in order."""

@@ -59,7 +59,7 @@ class RobotJoint:
     child: str
     frame: Pose
     axes: np.ndarray
-    node: Node
+    node: Node | None  # None for a joint massprops adds (a description's base)
     limits: tuple | None = None
     damping: float = 0.0
     stiffness: float = 0.0

@@ -60,7 +60,7 @@ class _Reader:
             attrs.update(node.attrs)
         self.autolimits = attrs.get("autolimits", "true") == "true"
         self.poses: dict = {}
-        self.joints: list[RobotJoint] = []
+        self.joints: list[RobotJoint | None] = []  # None: an inactive <equality> loop
         self.floating: set = set()
         self.notes: set = set()
         self.generated: list[str] = []  # <composite>/<flexcomp> met: their bodies not expanded

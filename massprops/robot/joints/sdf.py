@@ -17,6 +17,7 @@ several joints (a closed chain): the joints that close loops are marked (`frames
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -27,6 +28,7 @@ from massprops.robot.joints.frames import (
     IDENTITY,
     WORLD_LINK,
     Mechanism,
+    Pose,
     RobotCoupling,
     RobotJoint,
     compose,
@@ -55,7 +57,10 @@ def sdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
     """Joints and link poses of every ``<model>`` under the SDF root ``root``."""
     v = Values(path)
     version = _version(root)
-    joints, poses, notes, couplings = [], {}, set(), []
+    joints: list[RobotJoint] = []
+    poses: dict[str, Pose] = {}
+    notes: set[str] = set()
+    couplings: list[RobotCoupling] = []
     for model in root.iter("model"):
         prefix = _scope(model)
         placed = IDENTITY
@@ -82,7 +87,7 @@ def sdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
 
 def _static(model: Node) -> bool:
     """``<static>true`` on the model or any model enclosing it."""
-    node = model
+    node: Node | None = model
     while node is not None and node.tag == "model":
         flag = node.find("static")
         if flag is not None and flag.text.strip().lower() in ("true", "1"):
@@ -94,7 +99,7 @@ def _static(model: Node) -> bool:
 def _names(model: Node) -> list[str]:
     """The names of ``model`` and its enclosing models, outermost first."""
     out = []
-    node = model
+    node: Node | None = model
     while node is not None and node.tag == "model":
         out.append(node.attrs.get("name", "?"))
         node = node.parent
@@ -117,10 +122,11 @@ def _end(node: Node, tag: str, scopes: tuple[str, str], links: set, v: Values,
             return scope + text
     attached = _attached_link(text, graph)
     for scope in scopes if attached is not None else ():
-        if scope + attached in links:
-            return scope + attached
-    raise v.error(el, f"joint {name!r}: no link named {text!r} in this model; check the "
-                      "spelling")
+        if scope + cast(str, attached) in links:
+            return scope + cast(str, attached)
+    # a text, so el is there
+    raise v.error(cast(Node, el), f"joint {name!r}: no link named {text!r} in this model; "
+                                  "check the spelling")
 
 
 def _attached_link(frame: str, graph: _FrameGraph) -> str | None:
@@ -168,13 +174,14 @@ def _joint(node: Node, scopes: tuple[str, str], graph: _FrameGraph, v: Values, v
             raise v.error(axis or node, f"joint {name!r} ({written}) needs <{tag}><xyz>"
                                         "0 0 1</xyz></{tag}>: the direction it turns or slides "
                                         "along")
+        axis = cast(Node, axis)  # xyz_el came from it
         xyz = v.text(xyz_el, 3, "<xyz>0 0 1</xyz>")
         axes.append(in_model[0].T @ _axis_in_model(axis, xyz_el, xyz, graph, in_model, v,
                                                     version))
         axes[-1] = unit_axis(v, xyz_el, axes[-1])
-        tag = axis.find("mimic")
-        if tag is not None:
-            couplings.append(_mimic(tag, prefix + name, prefix, v))
+        mimic_el = axis.find("mimic")
+        if mimic_el is not None:
+            couplings.append(_mimic(mimic_el, prefix + name, prefix, v))
         limit = axis.find("limit")
         lo = _number(limit, "lower", v)
         hi = _number(limit, "upper", v)

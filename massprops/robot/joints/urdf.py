@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -12,6 +13,8 @@ from massprops.robot.formats.xmltree import Node
 from massprops.robot.joints.frames import (
     IDENTITY,
     Mechanism,
+    Pose,
+    RobotCoupling,
     RobotJoint,
     mimic,
     poses_from_tree,
@@ -32,7 +35,10 @@ def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
     ``<mimic joint multiplier offset>`` is the coupling q = multiplier q_joint + offset
     (defaults 1 and 0), enforced as a constraint (`frames.RobotCoupling`)."""
     v = Values(path)
-    joints, tree, notes, couplings = [], [], set(), []
+    joints: list[RobotJoint] = []
+    tree: list[tuple[str, str, Pose]] = []
+    notes: set[str] = set()
+    couplings: list[RobotCoupling] = []
     for node in root.findall("joint"):
         name = node.attrs.get("name")
         if not name:
@@ -42,8 +48,8 @@ def urdf_mechanism(root: Node, path: Path, links: list[str]) -> Mechanism:
             raise v.error(node, f"joint {name!r}: type {written!r} is not a URDF joint type; "
                                 f"use one of {', '.join(_URDF_KINDS)}, planar")
         kind = _URDF_KINDS.get(written, "planar")
-        parent = node.find("parent").attrs["link"]  # parse_urdf checked both ends
-        child = node.find("child").attrs["link"]
+        parent = cast(Node, node.find("parent")).attrs["link"]  # parse_urdf checked both ends
+        child = cast(Node, node.find("child")).attrs["link"]
         origin = node.find("origin")
         pose = IDENTITY if origin is None else (
             rpy_matrix(*v.attr(origin, "rpy", 3, [0, 0, 0])), v.attr(origin, "xyz", 3, [0, 0, 0]))

@@ -10,17 +10,23 @@ The element text is ASCII, so it splices into UTF-8 (and any ASCII-compatible en
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from massprops.errors import RobotModelError
 from massprops.io.atomic import OutputKind, atomic_write_bytes
 from massprops.robot.formats.xmltree import Node
 from massprops.robot.write.elements import WRITERS
 
+if TYPE_CHECKING:
+    from massprops.robot.inertials.combine import LinkMass
+
 __all__ = ["description_output", "edited_bytes", "write_description"]
 
 
-def edited_bytes(data: bytes, fmt: str, edits: list[tuple[Node, Node | None, object]]) -> bytes:
+def edited_bytes(data: bytes, fmt: str,
+                 edits: Sequence[tuple[Node, Node | None, LinkMass]]) -> bytes:
     """``data`` with each (link node, inertial node or None, LinkMass) edit applied."""
     if data[:2] in (b"\xff\xfe", b"\xfe\xff"):
         raise RobotModelError("UTF-16 descriptions cannot be edited in place; convert the file "
