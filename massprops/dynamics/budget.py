@@ -139,6 +139,25 @@ def too_fast(mass: float, moment: float, velocity, angular_velocity) -> tuple[st
     return None
 
 
+STEPS_PER_RUN = 1000
+"""A fixed step the scene does not give is the duration / this, or shorter (`default_step`)."""
+
+STEPS_PER_RATE = 0.1
+"""A fixed step the scene does not give is at most this / the fastest rate it must resolve:
+RK4 is stable to h ρ ≈ 2.8, and 0.1 keeps it accurate (`default_step`)."""
+
+
+def default_step(duration: float, rate: float) -> float:
+    """The fixed step (s) of a run the scene gives none: duration / STEPS_PER_RUN, and at most
+    STEPS_PER_RATE / ``rate`` (1/s: the fastest rate the method must resolve, 0 for none). The
+    one rule of both engines; each says which rate: a system the spectral radius of its
+    right-hand side's Jacobian at the start, for explicit methods only
+    (`systems.methods.default_step`), one free body its spin and, for explicit methods, its
+    stiffest force (`simulate.default_step`)."""
+    h = duration / STEPS_PER_RUN
+    return min(h, STEPS_PER_RATE / rate) if rate > 0 else h
+
+
 DIAGNOSTIC_SAMPLES = 100
 """Without a sampling interval, the run is still sampled at this many intervals (dense output,
 cheap) so that drifts are maxima over the run and a divergence is located in time."""

@@ -33,6 +33,7 @@ from massprops.dynamics.budget import (
     check_fixed_steps,
     sample_times,
 )
+from massprops.dynamics.budget import default_step as budget_default_step
 from massprops.dynamics.compiled.compiling import prepare
 from massprops.dynamics.forces import (
     DRAG,
@@ -411,13 +412,12 @@ def _setting(spec, scene: Scene, program: ForceProgram, rtol: float | None,
 
 
 def default_step(scene: Scene, program: ForceProgram, *, stiff: bool) -> float:
-    """A fixed step when the scene gives none: 1/1000 of the run, and small against the spin rate
-    (0.05 rad per step) and, for explicit methods, against the stiffest rate (0.1 per step). A
+    """A fixed step when the scene gives none, `budget.default_step`'s rule: the fastest rate is
+    twice the spin (0.05 rad per step) and, for explicit methods, the stiffest force's rate. A
     stiff method steps over the stiff rate: that is its point."""
-    ini = scene.initial
-    spin = float(np.linalg.norm(ini.angular_velocity))
+    spin = float(np.linalg.norm(scene.initial.angular_velocity))
     rate = max(spin / 0.5, 0.0 if stiff else program.stiffest_rate)
-    return min(scene.time.duration / 1e3, 0.1 / rate) if rate > 0 else scene.time.duration / 1e3
+    return budget_default_step(scene.time.duration, rate)
 
 
 def _energy_floor(program: ForceProgram, size: float, y0: np.ndarray) -> float:

@@ -21,6 +21,7 @@ from massprops.dynamics.accuracy import (
     rotation_floor,
 )
 from massprops.dynamics.budget import STEP_BUDGET
+from massprops.dynamics.budget import default_step as budget_default_step
 from massprops.dynamics.integrators import INTEGRATORS, SYSTEM_METHODS
 from massprops.dynamics.integrators.base import check_rtol
 from massprops.dynamics.systems.integrate import integrate
@@ -39,10 +40,6 @@ REASONS = {"dop853": "adaptive 8th order", "rk4": "fixed step, 4th order",
            "midpoint": "fixed step, implicit midpoint (symplectic)",
            "implicit": "fixed step, Radau IIA (L-stable, for stiff systems)"}
 """The JSON's ``reason`` of each method on a system (every one projects after each step)."""
-
-STEPS_PER_RUN = 1000
-"""A fixed step the scene does not give: the duration / this, shortened for an explicit method
-to 0.1 / the fastest rate of the start's linearised motion (default_step says why)."""
 
 
 def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
@@ -250,12 +247,8 @@ def turn_per_step(system: System, samples: Samples, steps: int) -> float:
 
 
 def default_step(system: System, y0: np.ndarray, duration: float, *, stiff: bool) -> float:
-    """A fixed step the scene does not give (s): duration / STEPS_PER_RUN, and for an explicit
-    method at most 0.1 / ρ, ρ the spectral radius of ∂ẏ/∂y at the start (forward differences of
-    the numpy right-hand side): RK4 is stable to h ρ ≈ 2.8, and 0.1 keeps it accurate. A stiff
-    method steps over the fast rates: that is its point."""
-    h = duration / STEPS_PER_RUN
-    if stiff:
-        return h
-    rate = fastest_rate(system, y0)
-    return min(h, 0.1 / rate) if rate > 0 else h
+    """A fixed step the scene does not give (s), `budget.default_step`'s rule: for an explicit
+    method the fastest rate is ρ, the spectral radius of ∂ẏ/∂y at the start (forward
+    differences of the compiled right-hand side, `stiffness.fastest_rate`). A stiff method
+    steps over the fast rates: that is its point."""
+    return budget_default_step(duration, 0.0 if stiff else fastest_rate(system, y0))
