@@ -17,8 +17,8 @@ reference and ladder runs of ``precision`` (whose fixed-step ladders leave out r
 ``precision.MAX_STEPS`` anyway). The closed form takes no steps; only its samples are bounded.
 
 The other limits one body and a system share live here too: the output times (`sample_times`),
-`auto`'s explicit-step budget, the energy growth that means divergence and the largest speeds a
-start may have (`too_fast`).
+the fixed step a scene does not give (`default_step`), `auto`'s explicit-step budget, the energy
+growth that means divergence and the largest speeds a start may have (`too_fast`).
 """
 
 from __future__ import annotations
