@@ -11,8 +11,8 @@ massprops was installed with `pip install .` (the kernels compiled into the whee
 runs start from an empty home cache (XDG_CACHE_HOME), NUMBA_CACHE_DIR unset, as a new user's:
 
     python benchmarks/bench_first_run.py [--scenes dzhanibekov,needle] [--warm 3]
-        [--tree /tmp/before] [--python /tmp/venv/bin/python] [--precision needle]
-        [--no-precision]
+        [--tree /tmp/before] [--python /tmp/venv/bin/python ...] [--installed-only]
+        [--precision needle] [--no-precision]
 
 Printed per scene: the integrator auto (or the scene) picks, cold and warm wall seconds of each
 tree, and whether the notice line appeared on stderr (it must on a cold run that compiles, never
@@ -94,16 +94,22 @@ def main() -> None:
     ap.add_argument("--scenes", default="", help="comma-separated names (default: all)")
     ap.add_argument("--warm", type=int, default=3)
     ap.add_argument("--tree", default=None, help="another checkout to measure side by side")
-    ap.add_argument("--python", default=None,
-                    help="the interpreter of an environment with massprops installed")
+    ap.add_argument("--python", action="append", default=[],
+                    help="the interpreter of an environment with massprops installed "
+                         "(repeatable: several installs side by side)")
+    ap.add_argument("--installed-only", action="store_true",
+                    help="measure only the --python environments, not this source tree")
     ap.add_argument("--precision", default="needle", help="scene of the first-precision run")
     ap.add_argument("--no-precision", action="store_true")
     args = ap.parse_args()
     names = [n for n in args.scenes.split(",") if n] or sorted(
         p.stem for p in SCENES.glob("*.yaml"))
-    trees = {"this": ROOT} | ({"other": Path(args.tree).resolve()} if args.tree else {})
-    if args.python:  # the installed package is the one a user meets: it leads
-        trees = {"installed": Path(args.python).absolute()} | trees
+    trees = {} if args.installed_only else {"this": ROOT}
+    trees |= {"other": Path(args.tree).resolve()} if args.tree else {}
+    # the installed package is the one a user meets: it leads
+    installed = {(f"installed{k + 1}" if len(args.python) > 1 else "installed"):
+                 Path(py).absolute() for k, py in enumerate(args.python)}
+    trees = installed | trees
     print(f"{'scene':18s} {'integrator':11s} " + " ".join(
         f"{label + ' cold (cpu)':>17s} {label + ' warm':>10s}" for label in trees) + "  notes")
     worst_first, worst_exact = 0.0, 0.0

@@ -96,7 +96,7 @@ def test_scene_opens_with_its_story_and_the_readme_names_autos_choice(name):
     if any(line.startswith(("bodies:", "model:")) for line in lines):  # a system's rule
         loaded = load_any_system(SCENES / f"{name}.yaml")
         system, y0, _ = system_run.prepare(loaded)
-        prepare(["rhs"])  # the stiffness probe evaluates the compiled right-hand side
+        prepare(["outputs"])  # the stiffness probe evaluates the compiled right-hand side
         picked = methods.choose(system, y0, loaded.time.integrator, None, None)[0]
     else:
         loaded = scene(name)

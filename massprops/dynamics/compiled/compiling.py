@@ -36,15 +36,16 @@ import numpy as np
 
 SYSTEM_ENTRIES = ("dop853", "fixed", "outputs", "rhs")
 """The systems engine's compiled entries (`systems_kernel.WARM_UPS`): the two step loops (the
-registry's ``kernel`` of each time-stepping method), the samples' outputs, and the right-hand
-side the stiffness probe differentiates. Each compiles and caches on its own."""
+registry's ``kernel`` of each time-stepping method), the samples' outputs (and the stiffness
+probe's right-hand sides), and one right-hand side callable from Python, which no run loads
+(the tests compare it with the numpy model). Each compiles and caches on its own."""
 
 COMPILE_SECONDS = {"splitting": 10.0, "dop853": 35.0, "fixed": 45.0, "outputs": 27.0,
                    "rhs": 22.0}
 """About how long (s, one idle core) compiling each kernel takes in a fresh process from an
-empty cache (benchmarks/bench_first_run.py; docs/performance.md, "Compiling"); a second systems
-entry in the same process costs less, the code they share being compiled already. Only for the
-notice's estimate and for sharing the work between two processes."""
+empty cache (benchmarks/bench_compile.py; docs/performance.md, "Compiling and loading"); a
+second systems entry in the same process costs less, the code they share being compiled
+already. Only for the notice's estimate and for sharing the work between two processes."""
 
 HELPER_TIMEOUT_S = 600.0
 """The longest the caller waits for the helper process before compiling the rest itself."""

@@ -1,8 +1,9 @@
 """The compiled entries of a system's run, each compiled and cached on its own so that a run
 compiles (or loads) only what it uses: `step_dop853` (one segment of DOP853, `systems_dop853`),
 `step_fixed` (one segment of rk4, midpoint or Radau IIA, `systems_fixed`), `evaluate_samples`
-(every sample's outputs, `systems_outputs`), and `systems_step.rhs` (one right-hand side, for
-the stiffness probe's Jacobian). `KERNELS` names them for `compiled.compiling`.
+(every sample's outputs, and the right-hand sides of the stiffness probe's states,
+`systems_outputs`), and `systems_step.rhs` (one right-hand side from Python, for the tests).
+`WARM_UPS` names them for `compiled.compiling`.
 
 They share the right-hand side, kinematics and loads (`systems_step`, `systems_loops`, ...):
 numba compiles those once per process and links a copy into each entry, so the second entry a

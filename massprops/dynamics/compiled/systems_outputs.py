@@ -71,6 +71,7 @@ from massprops.dynamics.compiled.systems_layout import (
 from massprops.dynamics.compiled.systems_linalg import lower_solve
 from massprops.dynamics.compiled.systems_loops import OK, accelerations, decompose, turned
 from massprops.dynamics.compiled.systems_mass import _net
+from massprops.dynamics.compiled.systems_step import rhs_ref
 from massprops.dynamics.compiled.systems_tree import (
     PRISMATIC,
     REVOLUTE,
@@ -79,8 +80,10 @@ from massprops.dynamics.compiled.systems_tree import (
 )
 from massprops.dynamics.compiled.unowned import at, by_ref
 
-STATES, ENERGIES, OUTPUTS = 10, 11, 12
-"""The modes of `systems_kernel.evaluate_samples` (the module doc says what each writes)."""
+STATES, ENERGIES, OUTPUTS, RATES = 10, 11, 12, 13
+"""The modes of `systems_kernel.evaluate_samples` (the module doc says what each writes;
+RATES: ẏ = [q̇, u̇] of each state, the right-hand side the steps take, for the stiffness
+probe's Jacobian)."""
 
 BODY_COLUMNS, JOINT_COLUMNS, RESIDUAL_COLUMNS = 18, 9, 2
 """Columns of a sample's row per body, per scene joint, and the residuals' (module doc)."""
@@ -113,6 +116,12 @@ def evaluate(prog, ws, own, t_out, y_out, out, istats, mode):
     udot = own[O_UDOT]
     for s in range(y_out.shape[0]):
         y, row = y_out[s], out[s]
+        if mode == RATES:
+            status = rhs_ref(pp, wp, t_out[s], y, row, -1)
+            if status != OK:
+                istats[3], istats[4] = status, s
+                return
+            continue
         q, u = y[:nq], y[nq:]
         if mode == OUTPUTS:
             status = accelerations(pp, wp, t_out[s], q, u, udot, -1, False)

@@ -70,18 +70,17 @@ def choose(system: System, y0: np.ndarray, name: str, rtol: float | None,
     return name, float(h), reason or REASONS[name]
 
 
-def kernels(name: str, scene=None) -> list[str]:
+def kernels(name: str) -> list[str]:
     """The compiled entries (`compiling.SYSTEM_ENTRIES`) a run of ``name`` (SYSTEM_INTEGRATORS)
-    uses, to be made ready before it starts: the method's step loop and the samples' outputs;
-    the right-hand side wherever the stiffness probe runs (`auto` on a sprung ``scene``; a fixed
-    step: its default step and its estimate's credit); and DOP853 where the estimate's
-    unresolved-mode probe runs (a stiff method). Only a failure's diagnosis may use more (the
-    probe, DOP853 narrowing a singular pose): compiled then, on first use."""
+    uses, to be made ready before it starts: the method's step loop (`auto`: DOP853's, what it
+    picks unless the scene is stiff) and the outputs' entry, which also serves the stiffness
+    probe (`system.spectral_radius`); and DOP853 where the estimate's unresolved-mode probe
+    runs (a stiff method). Only a failure's diagnosis may use more (DOP853 narrowing a singular
+    pose): compiled then, on first use."""
     if name == "auto":
-        return ["dop853", "outputs", *(["rhs"] if scene is not None and _sprung(scene) else [])]
+        return ["dop853", "outputs"]
     spec = INTEGRATORS[name]
-    return [cast(str, spec.kernel), "outputs", *(["rhs"] if spec.kind == "fixed" else []),
-            *(["dop853"] if spec.stiff else [])]
+    return [cast(str, spec.kernel), "outputs", *(["dop853"] if spec.stiff else [])]
 
 
 def kind_of(name: str) -> str:

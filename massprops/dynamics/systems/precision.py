@@ -82,8 +82,8 @@ def precision_system(scene: SystemScene, integrators: Sequence[str] | None = Non
     system, y0, _ = prepare(scene)
     # every rung's kernels and the reference's choice (its stiffness probe), at once: one
     # notice, and a helper compiles some on the second core
-    prepare_kernels(list(dict.fromkeys(k for n in (*names, "auto")
-                                       for k in kernels(n, scene))), notice)
+    prepare_kernels(list(dict.fromkeys(k for n in (*names, "auto") for k in kernels(n))),
+                    notice)
     ref, reference = reference_run(scene, every, (system, y0), notice)
     plan = [(n, s) for n in names for s in ladder(scene, n, (system, y0))]
     runs: list[PrecisionRun] = []

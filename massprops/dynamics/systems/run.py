@@ -238,7 +238,7 @@ def simulate_system(scene: SystemScene, *, integrator: str | None = None,
         check_rtol(float(rtol if rtol is not None else scene.time.rtol), scene.source)
     # compiled or loaded before the timed run (and before `choose`, whose stiffness probe
     # evaluates the compiled right-hand side); what `auto` picks, once it has picked
-    prepare_kernels(kernels(name, scene), notice)
+    prepare_kernels(kernels(name), notice)
     name, setting, reason = choose(system, y0, name, rtol, step)
     prepare_kernels(kernels(name), notice)
     if kind_of(name) == "fixed":  # a default step too: the run bound, before the run

@@ -341,24 +341,38 @@ def _min_norm(g: np.ndarray, chol: MassFactor, residual: np.ndarray,
 
 def spectral_radius(system, y: np.ndarray, t: float = 0.0) -> float:
     """ρ(∂ẏ/∂y) at (t, y), 1/s: the spectral radius of the right-hand side's Jacobian by forward
-    differences (n + 1 evaluations of the compiled right-hand side, the one the runs step),
-    `stiffness.fastest_rate` at the start; the caller has the systems kernel ready."""
-    # deferred: numba's kernels, only where a rate is asked for (auto, an estimate, a failure)
-    from massprops.dynamics.compiled.systems_step import OK, rhs, workspace
-
-    ws = workspace(system.program)
-
-    def f(y: np.ndarray) -> np.ndarray:
-        out = np.empty_like(y)
-        if rhs(system.program, ws, t, y, out, -1) == OK:
-            return out
-        udot = system.solve(t, y, check=False, full=False).udot  # says what went wrong
-        return np.concatenate([tr.qdot(system.tree, y[:system.nq], y[system.nq:]), udot])
-
-    f0, n = f(y), y.size
-    jac = np.empty((n, n))
+    differences: the n + 1 states evaluated in one call of the compiled outputs' entry (its
+    RATES mode: the right-hand side the runs step), `stiffness.fastest_rate` at the start; the
+    caller has that entry ready (`compiling.prepare`)."""
+    n = y.size
+    states = np.repeat(y[None, :], n + 1, axis=0)
     for j in range(n):
-        moved = y.copy()
-        moved[j] += math.sqrt(tolerances.EPS) * max(1.0, abs(y[j]))
-        jac[:, j] = (f(moved) - f0) / (moved[j] - y[j])
+        states[j + 1, j] += math.sqrt(tolerances.EPS) * max(1.0, abs(y[j]))
+    f = _rates(system, t, states)
+    jac = (f[1:] - f[0]).T / (np.diagonal(states[1:]) - y)
     return float(np.abs(np.linalg.eigvals(jac)).max(initial=0.0))
+
+
+def _rates(system, t: float, states: np.ndarray) -> np.ndarray:
+    """ẏ (k, n) at the states (k, n), all at time t: the compiled right-hand side, and where it
+    fails at a state (M not positive definite there, a rank drop) the numpy solve, which says
+    what went wrong or gives the rates."""
+    # deferred: numba's kernels, only where a rate is asked for (auto, an estimate, a failure)
+    from massprops.dynamics.compiled.systems_kernel import evaluate_samples
+    from massprops.dynamics.compiled.systems_outputs import RATES
+    from massprops.dynamics.compiled.systems_step import OK
+
+    out, start = np.empty_like(states), 0
+    while start < len(states):
+        istats = np.array([0, 0, 0, OK, 0, -1, -1], dtype=np.int64)
+        rest = len(states) - start
+        evaluate_samples(system.program, np.full(rest, float(t)), states[start:], out[start:],
+                         istats, RATES)
+        if istats[3] == OK:
+            break
+        k = start + int(istats[4])
+        y = states[k]
+        udot = system.solve(t, y, check=False, full=False).udot  # says what went wrong
+        out[k] = np.concatenate([tr.qdot(system.tree, y[:system.nq], y[system.nq:]), udot])
+        start = k + 1
+    return out
