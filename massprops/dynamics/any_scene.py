@@ -61,9 +61,7 @@ def load(path: str | os.PathLike, duration: float | None = None, *,
 
 def is_system(scene: AnyScene) -> bool:
     """``scene`` is a system's (`load` gave a `SystemScene`)."""
-    from massprops.dynamics.systems.model import SystemScene  # deferred: light, numpy only
-
-    return isinstance(scene, SystemScene)
+    return _system(scene) is not None
 
 
 def _system(scene: AnyScene) -> SystemScene | None:
