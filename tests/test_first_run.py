@@ -199,16 +199,10 @@ def test_building_the_same_sources_again_loads_the_kernels_from_the_builders_cac
 
 COUNT_COMPILES = """
 from numba.core import event
-compiled = []
-class Listener(event.Listener):
-    def on_start(self, ev):
-        compiled.append(ev)
-    def on_end(self, ev):
-        pass
-event.register("numba:compile", Listener())
 from massprops.dynamics.integrators._subflows import drift_work
-drift_work()
-print(len(compiled))
+with event.install_recorder("numba:compile") as seen:
+    drift_work()
+print(sum(ev.is_start for _, ev in seen.buffer))
 """
 
 
