@@ -247,3 +247,32 @@ def test_not_a_gltf_file(run, tmp_path):
     src.write_bytes(b"not a glb at all")
     res = run("inspect", src, "--write-physics", tmp_path / "out.glb")
     assert res.exit_code == 1 and "fake.glb" in one_error_line(res)
+
+
+def test_inward_mesh_is_flipped_and_said_once(run, tmp_path):
+    corners, tris = box()
+    src = save_glb(tmp_path / "inward.glb", [(corners, tris[:, ::-1].copy())],
+                   [{"mesh": 0}, {**TURNED, "mesh": 0}])
+    out = tmp_path / "out.glb"
+    res = run("inspect", src, "--write-physics", out)
+    assert res.exit_code == 0, res.stderr
+    warnings = res.stderr.splitlines()
+    assert len(warnings) == 1 and warnings[0].startswith("massprops: warning: ")
+    assert "mesh 0" in warnings[0]
+    gltf = pygltflib.GLTF2.load(str(out))
+    check_cuboid(motion_of(gltf, 0), 12.0)
+    assert motion_of(gltf, 1) == motion_of(gltf, 0)
+
+
+def test_primitives_of_a_mesh_are_one_solid(run, tmp_path):
+    corners, tris = box()
+    gltf, blob = build([(corners, tris[:6].copy()), (corners, tris[6:].copy())], [{"mesh": 0}])
+    first, second = gltf.meshes
+    gltf.meshes = [pygltflib.Mesh(primitives=first.primitives + second.primitives)]
+    gltf.set_binary_blob(blob)
+    src = tmp_path / "halves.glb"
+    gltf.save_binary(str(src))
+    out = tmp_path / "out.glb"
+    res = run("inspect", src, "--write-physics", out, "--mass", "2")
+    assert res.exit_code == 0, res.stderr
+    check_cuboid(motion_of(pygltflib.GLTF2.load(str(out)), 0), 2.0)

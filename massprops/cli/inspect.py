@@ -171,7 +171,7 @@ def _write_physics(ctx: click.Context, meshes: tuple[str, ...], out: str, force:
                                 repairs=options["repairs"], force=force)
         for done in motions:
             for w in done.warnings:
-                say_warning(meshes[0], w)
+                say_warning(f"{meshes[0]}: mesh {done.mesh}", w)
             if out_format == "json":
                 obj = {"file": meshes[0], "output": out, **done.as_dict()}
                 to_stdout(functools.partial(emit_json, obj))

@@ -117,7 +117,8 @@ def _glb_chunks(data: bytes, path: Path) -> tuple[bytes, bytes | None, bytes]:
                 raise MeshFormatError(f"{path}: the binary chunk runs past the end of the "
                                       "file; the file is truncated")
             binary = rest[8:8 + bin_length]
-    return data[20:20 + json_length], binary, rest
+    # padding: spaces by the spec; some writers pad with NULs, which JSON does not allow
+    return data[20:20 + json_length].rstrip(b" \x00"), binary, rest
 
 
 def asset_bytes(asset: GltfAsset, document: dict) -> bytes:

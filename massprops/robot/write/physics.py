@@ -40,7 +40,7 @@ _GLTF = (".glb", ".gltf")
 class NodeMotion:
     """One mesh node's motion as written: ``node`` and ``mesh`` indices, the node's ``name``
     (None without one), ``motion`` (the four keys of `gltf_motion_object`: kg, m, kg·m², node
-    space), the mesh inspection's ``warnings``."""
+    space), the mesh inspection's ``warnings`` (on the first node of each mesh only)."""
 
     node: int
     mesh: int
@@ -79,12 +79,13 @@ def write_physics(source: str | os.PathLike[str], out: str | os.PathLike[str], *
     found = mesh_nodes(asset)
     if not found:
         raise MeshFormatError(f"{source}: no node has a mesh; nothing to give a motion")
-    inspected: dict[int, Inspection] = {}
-    for index, mesh_index, linear in found:
+    for index, _, linear in found:  # every node's transform before any mesh is read
         _require_unscaled(source, index, nodes[index], linear)
         if "skin" in nodes[index]:
             raise MeshFormatError(f"{source}: node {index}{_named(nodes[index])} is skinned (its "
                                   "shape follows its joints); a rigid body cannot be")
+    inspected: dict[int, Inspection] = {}
+    for _, mesh_index, _ in found:
         if mesh_index not in inspected:
             name = f"{source}: mesh {mesh_index}{_named(asset.list_of('meshes')[mesh_index])}"
             inspected[mesh_index] = inspect_mesh(
@@ -93,7 +94,7 @@ def write_physics(source: str | os.PathLike[str], out: str | os.PathLike[str], *
     scale = 1.0
     if mass is not None:  # one density for all: the total over every node, instances counted
         scale = mass / sum(inspected[m].mass for _, m, _ in found)
-    motions = []
+    motions: list[NodeMotion] = []
     document = copy.deepcopy(asset.document)
     for index, mesh_index, _ in found:
         done = inspected[mesh_index]
@@ -104,8 +105,9 @@ def write_physics(source: str | os.PathLike[str], out: str | os.PathLike[str], *
         physics = extensions.setdefault(EXTENSION, {})
         physics["motion"] = {**physics.get("motion", {}), **motion}
         name = node.get("name")
+        first = all(m.mesh != mesh_index for m in motions)  # a mesh's warnings said once
         motions.append(NodeMotion(index, mesh_index, name if isinstance(name, str) else None,
-                                  motion, done.warnings))
+                                  motion, done.warnings if first else ()))
     used = document.setdefault("extensionsUsed", [])
     if EXTENSION not in used:
         used.append(EXTENSION)
