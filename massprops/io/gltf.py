@@ -85,8 +85,8 @@ def read_asset(path: str | os.PathLike[str]) -> GltfAsset:
     except (UnicodeDecodeError, ValueError) as exc:
         raise MeshFormatError(f"{path}: not glTF JSON ({exc}); expected a .gltf or .glb "
                               "asset") from exc
-    version = str(document.get("asset", {}).get("version", "")) if isinstance(
-        document, dict) and isinstance(document.get("asset"), dict) else ""
+    info = document.get("asset") if isinstance(document, dict) else None
+    version = str(info.get("version", "")) if isinstance(info, dict) else ""
     if not version.startswith("2."):
         raise MeshFormatError(f"{path}: asset.version is {version or 'missing'!r}; expected a "
                               "glTF 2.0 asset")
