@@ -236,3 +236,10 @@ NURBS_RATIONAL_START = 6
 """On a rational patch that rule starts this many points per span above the order exact for
 polynomials: the rational quadratic patches measured reach round-off at 15-19 points, so the
 orders below (7-11) are wasted work; the bar still comes from two orders compared."""
+
+GLTF_UNSCALED_ATOL = 1e-5
+"""A glTF mesh node counts as unscaled (`--write-physics` writes its motion) when the linear part
+of its transform to the scene root, MᵀM, is the identity within this, entry by entry. Exporters
+write rotations as float32 quaternions, unit to ~1e-7, so a rotation's MᵀM is 1 ± ~4e-7 (a few
+nodes deep, a few times that); a scale an author set differs by percent, a unit mix-up (0.01,
+0.001) by orders."""

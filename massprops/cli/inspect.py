@@ -4,6 +4,7 @@ in input order as table, JSON, CSV or a robot format's inertial element."""
 from __future__ import annotations
 
 import contextlib
+import functools
 import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -60,11 +61,17 @@ from massprops.errors import UsageError, error_message, exit_code
 @click.option("--density-map", metavar="FILE.yaml", default=None,
               help="CAD files: solid names or glob patterns to densities in kg/m³ (first "
                    "match in file order; others take --density).")
+@click.option("--write-physics", metavar="OUT", default=None,
+              help="MESH is one glTF asset (.glb/.gltf): write a copy to OUT (same extension) "
+                   "with the KHR_physics_rigid_bodies motion on each mesh node, in the node's "
+                   "space; --mass is the asset's total. Prints one motion per node.")
+@click.option("--force", is_flag=True, help="With --write-physics: replace OUT if it exists "
+                                             "(never MESH).")
 @click.pass_context
 def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_format: str,
             principal: bool, jobs: int | None, recursive: bool, files_from: str | None,
             null: bool, scheduler: str | None, quiet: bool, density_map: str | None,
-            **mesh_options: Any) -> None:
+            write_physics: str | None, force: bool, **mesh_options: Any) -> None:
     """Mass, centre of mass, inertia tensor, principal moments and axes of each MESH.
 
     MESH is a file (OBJ, STL, .vf/.vtx/.fac, PLY, OFF, ...), '-' for standard input, a
@@ -81,6 +88,12 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
     out_format = "json" if as_json else output_format
     if not meshes and files_from is None:
         raise click.UsageError("give MESH arguments or --files-from FILE")
+    if write_physics is not None:
+        ctx.exit(_write_physics(ctx, meshes, write_physics, force, out_format, options,
+                                files_from=files_from, jobs=jobs, scheduler=scheduler,
+                                recursive=recursive, density_map=density_map))
+    if force:
+        raise click.UsageError("--force goes with --write-physics (replace OUT)")
     from massprops.cad import is_cad_path  # no OpenCASCADE: extensions only
 
     cad_files = [m for m in meshes if is_cad_path(m)]
@@ -131,6 +144,47 @@ def inspect(ctx: click.Context, meshes: tuple[str, ...], as_json: bool, output_f
 
         end_helper_processes()
     ctx.exit(code)
+
+
+_PHYSICS_FORMATS = ("table", "json", "gltf")
+"""What --write-physics prints per mesh node: a line, a JSON object with the node, the motion."""
+
+
+def _write_physics(ctx: click.Context, meshes: tuple[str, ...], out: str, force: bool,
+                   out_format: str, options: dict[str, Any], **batch: Any) -> int:
+    """--write-physics: one glTF asset in, its copy with motions out; the exit code."""
+    used = [f"--{k.replace('_', '-')}" for k, v in batch.items() if v not in (None, False)]
+    used += [flag for key, flag in (("format", "--input-format"), ("unit", "--unit"))
+             if options[key] not in (None, "m")]
+    if len(meshes) != 1 or meshes[0] == "-" or used:
+        why = f"not {', '.join(used)}" if used else "one MESH file"
+        raise click.UsageError(f"--write-physics reads one glTF file (.glb/.gltf, metres): {why}")
+    if out_format not in _PHYSICS_FORMATS:
+        raise click.UsageError(f"--write-physics prints {', '.join(_PHYSICS_FORMATS)}, not "
+                               f"--format {out_format}")
+    # deferred: only --write-physics reads and writes glTF assets
+    from massprops.robot.write.physics import write_physics
+
+    def run() -> None:
+        motions = write_physics(meshes[0], out, density=options["density"],
+                                mass=options["mass"], allow_open=options["allow_open"],
+                                repairs=options["repairs"], force=force)
+        for done in motions:
+            for w in done.warnings:
+                say_warning(f"{meshes[0]}: mesh {done.mesh}", w)
+            if out_format == "json":
+                obj = {"file": meshes[0], "output": out, **done.as_dict()}
+                to_stdout(functools.partial(emit_json, obj))
+            elif out_format == "gltf":
+                to_stdout(functools.partial(emit_json, done.motion))
+            else:
+                name = "" if done.name is None else f" {done.name!r}"
+                com = ", ".join(f"{x:.6g}" for x in done.motion["centerOfMass"])
+                line = (f"{out}: node {done.node}{name} (mesh {done.mesh}): mass "
+                        f"{done.motion['mass']:.6g} kg, centre of mass [{com}] m")
+                to_stdout(functools.partial(click.echo, line))
+
+    return guarded(ctx, run)
 
 
 def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool,

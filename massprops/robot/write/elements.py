@@ -18,7 +18,8 @@ import numpy as np
 
 from massprops.errors import setting_ref
 
-__all__ = ["WRITERS", "gltf_motion", "mjcf_inertial", "sdf_inertial", "urdf_inertial", "usd_mass"]
+__all__ = ["WRITERS", "gltf_motion", "gltf_motion_object", "mjcf_inertial", "sdf_inertial",
+           "urdf_inertial", "usd_mass"]
 
 Writer = Callable[..., str]
 
@@ -102,21 +103,27 @@ def _principal(inertia) -> tuple[np.ndarray, np.ndarray]:
     return moments, matrix_to_quat(axes)
 
 
+def gltf_motion_object(mass: float, center_of_mass, inertia) -> dict[str, object]:
+    """glTF ``KHR_physics_rigid_bodies`` motion as a dict: ``{"mass", "centerOfMass",
+    "inertiaDiagonal", "inertiaOrientation"}``; kg, m, kg·m² in the node's (mesh's) frame; the
+    diagonal is the principal moments (ascending) in the frame the orientation gives, a unit
+    quaternion in glTF's order [x, y, z, w] taking that frame into the node's (w >= 0).
+    ``inspect --format gltf`` prints it, ``--write-physics`` puts it on the nodes."""
+    moments, q = _principal(inertia)
+    return {"mass": float(mass) + 0.0,
+            "centerOfMass": [float(x) + 0.0 for x in center_of_mass],
+            "inertiaDiagonal": [float(x) + 0.0 for x in moments],
+            "inertiaOrientation": [float(x) + 0.0 for x in (*q[1:], q[0])]}
+
+
 def gltf_motion(mass: float, center_of_mass, inertia, *, indent: str = "  ",
                 newline: str = "\n", principal: bool = False) -> str:
-    """glTF ``KHR_physics_rigid_bodies`` motion, one JSON object on one line:
-    ``{"mass", "centerOfMass", "inertiaDiagonal", "inertiaOrientation"}``; kg, m, kg·m² in the
-    node's (mesh's) frame; the diagonal is the principal moments (ascending) in the frame the
-    orientation gives, a unit quaternion in glTF's order [x, y, z, w] taking that frame into
-    the node's (w >= 0). Always principal: ``principal`` is accepted and changes nothing."""
-    moments, q = _principal(inertia)
+    """`gltf_motion_object` as one JSON object on one line. Always principal: ``principal`` is
+    accepted and changes nothing."""
     # deferred: json only for this format
     import json
 
-    return json.dumps({"mass": float(mass) + 0.0,
-                       "centerOfMass": [float(x) + 0.0 for x in center_of_mass],
-                       "inertiaDiagonal": [float(x) + 0.0 for x in moments],
-                       "inertiaOrientation": [float(x) + 0.0 for x in (*q[1:], q[0])]})
+    return json.dumps(gltf_motion_object(mass, center_of_mass, inertia))
 
 
 def usd_mass(mass: float, center_of_mass, inertia, *, indent: str = "    ",
