@@ -330,3 +330,26 @@ def _duration(seconds: float) -> str:
     hours, rest = divmod(seconds, 3600)
     minutes, secs = divmod(rest, 60)
     return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"
+
+
+def print_sweep(name: str, prepared, result: dict) -> None:
+    """A sweep's summary: one line per output component (mean ± its uncertainty, sd, the 5-95 %
+    range) and the largest sensitivities."""
+    _console.print(f"{cli_text(name)}: {result['samples']} samples, {result['failed']} failed"
+                   + (f", {result['redrawn']} mass-property draws redrawn"
+                      if result["redrawn"] else ""))
+    t = Table(title="outputs over the samples")
+    for col in ("output", "mean", "± (mean)", "sd", "5 %", "50 %", "95 %"):
+        t.add_column(col, justify="left" if col == "output" else "right")
+    for output, stats in result["summary"].items():
+        if stats is None:
+            _row(t, output, "none ran", "", "", "", "", "")
+            continue
+        mean = np.ravel(np.asarray(stats["mean"], dtype=float))
+        suffixes = ("x", "y", "z") if len(mean) == 3 else tuple(map(str, range(len(mean))))
+        for i in range(len(mean)):
+            label = output if len(mean) == 1 else f"{output}[{suffixes[i]}]"
+            u = float(np.ravel(stats["mean_uncertainty"])[i])
+            _row(t, label, fmt(float(mean[i]), u if math.isfinite(u) else 0.0), f"{u:.2g}",
+                 *(f"{float(np.ravel(stats[k])[i]):.6g}" for k in ("sd", "p05", "p50", "p95")))
+    _print_table(t)

@@ -59,6 +59,21 @@ def load(path: str | os.PathLike, duration: float | None = None, *,
     return dataclasses.replace(scene, time=dataclasses.replace(scene.time, duration=duration))
 
 
+def parse(text: str, *, source: str, base_dir: str | os.PathLike) -> AnyScene:
+    """A scene file's text, of either kind (``source`` names it in messages; ``base_dir`` is
+    where its relative paths start): what `load` gives for the file. SceneError,
+    RobotModelError (one line)."""
+    from massprops.dynamics.systems.scene import is_system_text  # deferred: a line scan
+
+    if is_system_text(text):
+        from massprops.dynamics.systems.robot_scene import parse_any_system  # deferred
+
+        return parse_any_system(text, source=source, base_dir=Path(base_dir))
+    from massprops.dynamics.scene import parse_scene  # deferred: the one-body reader
+
+    return parse_scene(text, source=source, base_dir=Path(base_dir))
+
+
 def is_system(scene: AnyScene) -> bool:
     """``scene`` is a system's (`load` gave a `SystemScene`)."""
     return _system(scene) is not None

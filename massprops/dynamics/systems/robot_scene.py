@@ -57,7 +57,8 @@ from massprops.files import file_problem
 from massprops.robot.formats.xacro_run import parse_xacro_arg
 
 __all__ = ["DESCRIPTION_SUFFIXES", "check_description_settings", "description_scene",
-           "is_description", "is_system_file", "load_any_system", "parse_model_scene"]
+           "is_description", "is_system_file", "load_any_system", "parse_any_system",
+           "parse_model_scene"]
 
 DESCRIPTION_SUFFIXES = (".urdf", ".sdf", ".xml", ".xacro")
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
@@ -109,12 +110,15 @@ def load_any_system(path: str | os.PathLike, duration: float | None = None, *,
                                  package_paths=package_paths, xacro_args=xacro_args)
     check_description_settings(path, package_paths, xacro_args)
     path = Path(path)
-    text = scene_text(path)
-    if any(line.startswith("model:") for line in text.splitlines()):
-        scene = parse_model_scene(text, source=os.fspath(path), base_dir=path.parent)
-    else:
-        scene = parse_system(text, source=os.fspath(path), base_dir=path.parent)
+    scene = parse_any_system(scene_text(path), source=os.fspath(path), base_dir=path.parent)
     return scene if duration is None else with_time(scene, duration=duration)
+
+
+def parse_any_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
+    """A system scene's text, ``bodies:`` or ``model:`` (SceneError, RobotModelError)."""
+    if any(line.startswith("model:") for line in text.splitlines()):
+        return parse_model_scene(text, source=source, base_dir=base_dir)
+    return parse_system(text, source=source, base_dir=base_dir)
 
 
 def parse_model_scene(text: str, *, source: str, base_dir: Path) -> SystemScene:

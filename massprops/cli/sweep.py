@@ -1,0 +1,187 @@
+"""``massprops sweep``: a scene run once per sample with named values varied (`massprops.sweep`)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from typing import Any
+
+import click
+
+from massprops.cli.app import cli
+from massprops.cli.common import RegistryChoice, emit_json, guarded, positive, say_note
+from massprops.cli.dynamics import _integrator_names
+
+_ROWS_EXTENSIONS = {"csv": (".csv",), "json": (".jsonl", ".json")}
+_POOL_AFTER_S = 2.0
+"""Without --jobs, samples whose runs add up to more than this (judged by a warm nominal run, s)
+go to a pool of every core; a shorter sweep runs here (a pool's start costs about a second)."""
+
+
+class _Counter:
+    """Samples done, on stderr: a bar on a terminal (not with --quiet), else nothing."""
+
+    def __init__(self, total: int, enabled: bool) -> None:
+        self.bar: Any = None
+        if enabled:
+            # deferred: rich loads only for a bar on a terminal
+            from rich.console import Console
+            from rich.progress import Progress
+
+            self.bar = Progress(console=Console(stderr=True), transient=True)
+            self.bar.start()
+            self.task = self.bar.add_task("sampling", total=total)
+
+    def step(self) -> None:
+        if self.bar is not None:
+            self.bar.advance(self.task)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
+@cli.command()
+@click.argument("scene_path", metavar="SCENE")
+@click.option("--vary", "varies", multiple=True, metavar="KEY=SPEC", required=True,
+              help="A scene value and how it varies (repeatable): KEY a path such as "
+                   "body.mass, bodies.upper.inertia, forces[0].stiffness, "
+                   "initial.angular_velocity[1]; SPEC normal:MEAN:SD, uniform:LOW:HIGH, "
+                   "lognormal:MEDIAN:FACTOR, relative:P (e.g. relative:5%) or values:A,B,C.")
+@click.option("--samples", type=click.IntRange(min=1), default=None,
+              help="Draws (per grid point); not needed when every value is a grid.")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Sample i's draws depend on the seed and i only.")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,
+              help="Local worker processes (default, for a sweep of more than a few seconds: "
+                   "one per core, or per two cores with the error estimate; else this process).")
+@click.option("--scheduler", metavar="ADDRESS", default=None,
+              help="Run on the Dask cluster of this scheduler (pip install 'massprops[dask]').")
+@click.option("--outputs", "outputs", default=None, metavar="NAME,...",
+              help="What each row reports, names into simulate's JSON (default: every body's "
+                   "final position and angular velocity, every joint's final coordinates and "
+                   "reaction force).")
+@click.option("--json", "as_json", is_flag=True, help="JSON lines: the rows, then the summary.")
+@click.option("--format", "out_format", type=click.Choice(["csv", "json"]), default=None,
+              help="The rows as CSV (the summary then on stderr) or JSON lines.")
+@click.option("--output", "output_path", default=None,
+              help="Write the rows to this file (.csv, or .jsonl for JSON) instead of stdout.")
+@click.option("--integrator", type=RegistryChoice(_integrator_names), default=None,
+              help="Overrides the scene's time.integrator.")
+@click.option("--rtol", type=float, callback=positive, help="Tolerance of adaptive methods.")
+@click.option("--step", type=float, callback=positive, help="Step of fixed-step methods [s].")
+@click.option("--no-estimate", is_flag=True,
+              help="Leave out each run's error estimate (about half the time).")
+@click.option("--force", is_flag=True, help="Replace an existing --output file.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+@click.pass_context
+def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples: int | None,
+          seed: int, jobs: int | None, scheduler: str | None, outputs: str | None,
+          as_json: bool, out_format: str | None, output_path: str | None,
+          integrator: str | None, rtol: float | None, step: float | None, no_estimate: bool,
+          force: bool, quiet: bool) -> None:
+    """Run SCENE once per sample with the --vary values drawn; print one row per sample and
+    a summary: each output's spread and its sensitivity to each value."""
+    if as_json and out_format == "csv":
+        raise click.UsageError("--json and --format csv contradict; give one")
+    if scheduler is not None and jobs is not None:
+        raise click.UsageError("--jobs and --scheduler contradict: the cluster's workers run "
+                               "the sweep; give one")
+    fmt = "json" if as_json else out_format
+    state: dict[str, Any] = {"failed": False, "interrupted": False}
+
+    def run() -> None:
+        # deferred: each command imports only what it runs (start-up of the others)
+        # deferred: each command imports only what it runs (start-up of the others)
+        from massprops.dynamics.compiled.compiling import whole_process
+        from massprops.io.atomic import OutputKind, atomic_write_bytes, check_output
+        from massprops.sweep import prepare, run_sweep, summarize
+        from massprops.sweep import table as csv_table
+
+        rows_format = fmt or ("json" if output_path and output_path.endswith((".json",
+                                                                              ".jsonl"))
+                              else "csv")
+        kind = OutputKind("the rows", _ROWS_EXTENSIONS[rows_format], "output")
+        if output_path:
+            check_output(output_path, kind, force=force, protect=[scene_path])
+        whole_process()
+        options: dict[str, Any] = {"estimate": not no_estimate}
+        options.update({k: v for k, v in (("integrator", integrator), ("rtol", rtol),
+                                          ("step", step)) if v is not None})
+        prepared = prepare(scene_path, varies, samples=samples, seed=seed,
+                           outputs=outputs.split(",") if outputs else None, options=options,
+                           notice=say_note)
+        executor, workers, client = None, None, None
+        if scheduler is not None:
+            from massprops.batch import dask_executor  # deferred: only --scheduler
+
+            executor, workers, client = dask_executor(scheduler)
+        if jobs is None and executor is None:
+            from massprops.batch import default_jobs  # deferred: only without --jobs
+
+            # a run with its error estimate already keeps two cores busy (its companions run
+            # on a helper thread): a worker per core would only take turns with them
+            cores = default_jobs() // (1 if no_estimate else 2)
+            pooled = prepared.sample_s * prepared.plan.count > _POOL_AFTER_S
+            n_jobs = max(1, cores) if pooled else 1
+        else:
+            n_jobs = jobs or 1
+        rows, lines = [], []
+        to_file = output_path is not None
+        if rows_format == "csv":
+            lines.append(csv_table.csv_line(csv_table.header(prepared)))
+            if not to_file and fmt is not None:
+                click.echo(lines[-1])
+        counter = _Counter(prepared.plan.count, not quiet and sys.stderr.isatty())
+        sweeping = run_sweep(prepared, jobs=n_jobs, executor=executor, workers=workers)
+        try:
+            for row in sweeping:
+                rows.append(row)
+                counter.step()
+                line = (csv_table.csv_line(csv_table.cells(prepared, row))
+                        if rows_format == "csv" else _json_line(row.as_dict()))
+                lines.append(line)
+                if not to_file and fmt is not None:
+                    click.echo(line)
+        except KeyboardInterrupt:
+            state["interrupted"] = True
+        finally:
+            sweeping.close()
+            counter.close()
+            if client is not None:
+                client.close()
+            # deferred: the pool's helpers, stopped where a pool may have started them
+            from massprops.batch.pool import end_helper_processes
+
+            end_helper_processes()
+        result = summarize(rows, prepared.plan.outputs, [v.key for v in prepared.plan.varies])
+        # the summary: after JSON rows, in their stream; on stderr beside CSV rows; as a table
+        # when no format was asked for (the rows then only in --output)
+        if to_file:
+            text = "\n".join(lines) + "\n"
+            if rows_format == "json":
+                text += _json_line(result) + "\n"
+            atomic_write_bytes(output_path, text.encode(), force=force,  # type: ignore[arg-type]
+                               protect=[scene_path])
+        if fmt == "json" and not to_file:
+            emit_json(result)
+        elif fmt == "csv":
+            click.echo(_json_line(result), err=True)
+        elif fmt is None:
+            # deferred: rich loads only for human-readable output
+            from massprops.cli.report import print_sweep
+
+            print_sweep(scene_path, prepared, result)
+        state["failed"] = result["failed"] > 0
+
+    code = guarded(ctx, run)
+    if state["interrupted"] and code == 0:
+        click.echo("massprops: interrupted; the rows done are kept", err=True)
+        code = 130
+    elif state["failed"] and code == 0:
+        code = 3
+    ctx.exit(code)
+
+
+def _json_line(obj: dict) -> str:
+    return json.dumps(obj, allow_nan=False)

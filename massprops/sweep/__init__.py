@@ -1,0 +1,23 @@
+"""Parameter sweeps: one scene run once per sample, with named scene values varied.
+
+``massprops sweep SCENE --vary KEY=SPEC ... --samples N --seed S`` (the contract's "sweep").
+Modules, in the order a sweep uses them:
+
+- `keys`: paths to scene values (``bodies.upper.mass``, ``forces[0].stiffness``) and to a run's
+  outputs (``final.joints.elbow.force``);
+- `specs`: how a value varies (normal, uniform, lognormal, relative, a grid of values);
+- `inertials`: a body's mass and inertia varied as a body's can be, every draw a valid inertial;
+- `sample`: one sample (its values from the seed and its index alone, its scene, its run);
+- `run`: the plan checked and run once, then every sample, here or on a pool or a Dask
+  cluster, rows in sample order;
+- `summary`: each output's spread, its uncertainty and its sensitivity to each value;
+- `table`: the rows as CSV.
+
+The library prints nothing; ``cli/sweep.py`` renders the rows and the summary.
+"""
+
+from massprops.sweep.run import Prepared, default_outputs, prepare, run_sweep
+from massprops.sweep.sample import Row
+from massprops.sweep.summary import summarize
+
+__all__ = ["Prepared", "Row", "default_outputs", "prepare", "run_sweep", "summarize"]

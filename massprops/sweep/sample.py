@@ -1,0 +1,251 @@
+"""One sample of a sweep: its values drawn, its scene built, run, and its outputs read.
+
+Sample i's generator is ``numpy.random.default_rng([seed, i])``: its draws depend on the seed
+and i alone, so any number of workers, in any order, give the same rows. The scene's own values
+(``forces[0].stiffness``) are written into its document, which is then read as the file would
+be; a body's mass properties (``body.mass``, ``bodies.upper.inertia``) are changed on the body
+read, as `inertials` says (for a robot's links too, which no scene text holds).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from massprops.dynamics import any_scene
+from massprops.dynamics.yamlnodes import compose
+from massprops.errors import MassPropsError, SceneError, UsageError, error_message
+from massprops.sweep import keys
+from massprops.sweep.inertials import MASS_KEYS, MassChange, draw_valid, shape_bounds
+from massprops.sweep.specs import Spec
+
+
+@dataclass(frozen=True)
+class Vary:
+    """One ``--vary KEY=SPEC``: its path's steps and, for a body's mass or inertia, which."""
+
+    key: str
+    steps: tuple[keys.Step, ...]
+    spec: Spec
+    mass: MassChange | None = None
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Everything a worker needs to run any sample (picklable, hashable: a worker reads the
+    scene once per plan). ``text`` is the scene file's (None: a robot description, read from
+    ``path``); ``grid`` the grid keys' combinations, each run ``draws`` times (sample i is
+    combination i // draws); ``options`` the run's keyword arguments for `any_scene.simulate`."""
+
+    path: str
+    text: str | None
+    varies: tuple[Vary, ...]
+    seed: int
+    draws: int
+    grid: tuple[tuple[float, ...], ...]
+    outputs: tuple[str, ...]
+    options: tuple[tuple[str, Any], ...] = ()
+    description: tuple[tuple[str, Any], ...] = ()
+
+    @property
+    def count(self) -> int:
+        return len(self.grid) * self.draws
+
+    @property
+    def grid_keys(self) -> tuple[Vary, ...]:
+        return tuple(v for v in self.varies if v.spec.is_grid)
+
+
+@dataclass
+class Row:
+    """One sample's result: the contract's row (`as_dict`) and the mass-property redraws."""
+
+    sample: int
+    values: dict[str, Any]
+    status: str = "ok"
+    error: str | None = None
+    outputs: dict[str, Any] | None = None
+    error_estimate: float | None = None
+    wall_time_s: float = 0.0
+    redrawn: int = field(default=0)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"sample": self.sample, "values": self.values, "status": self.status,
+                "error": self.error, "outputs": self.outputs,
+                "error_estimate": self.error_estimate, "wall_time_s": self.wall_time_s}
+
+
+def mass_change(key: str, steps: tuple[keys.Step, ...]) -> MassChange | None:
+    """The body and quantity of a mass-property key (``body.mass``, ``bodies.NAME.inertia``),
+    else None."""
+    if len(steps) == 2 and steps[0] == "body" and steps[1] in MASS_KEYS:
+        return MassChange(key, None, str(steps[1]))
+    if len(steps) == 3 and steps[0] == "bodies" and isinstance(steps[1], str) \
+            and steps[2] in MASS_KEYS:
+        return MassChange(key, steps[1], str(steps[2]))
+    return None
+
+
+# --- a worker's copy of the scene -------------------------------------------------------------
+@dataclass(frozen=True)
+class _Nominal:
+    scene: Any
+    bounds: Any  # the one mesh body's shape (`inertials.shape_bounds`), else None
+
+
+def load(plan: Plan) -> Any:
+    """The scene as written (no value varied)."""
+    if plan.text is None:
+        opts = dict(plan.description)
+        return any_scene.load(plan.path, opts.get("duration"),
+                              package_paths=opts.get("package_paths", ()),
+                              xacro_args=opts.get("xacro_args"))
+    return any_scene.parse(plan.text, source=plan.path, base_dir=Path(plan.path).parent)
+
+
+@functools.lru_cache(maxsize=2)
+def _nominal(plan: Plan) -> _Nominal:
+    scene = load(plan)
+    bounds = None
+    body_source = getattr(scene, "body_source", "explicit")
+    if any(v.mass is not None for v in plan.varies) and body_source != "explicit":
+        bounds = shape_bounds(body_source, _mesh_unit(plan))
+    return _Nominal(scene, bounds)
+
+
+def _mesh_unit(plan: Plan) -> str:
+    """The one mesh body's ``unit`` as its scene writes it (metres when it says none)."""
+    root = compose(plan.text or "", plan.path)
+    return (keys.text_at(root, ("body", "unit")) if root is not None else None) or "m"
+
+
+# --- one sample -------------------------------------------------------------------------------
+def run_sample(plan: Plan, index: int) -> Row:
+    """Sample ``index`` (0 <= index < plan.count): a failed one is a row with its error."""
+    start = time.perf_counter()
+    rng = np.random.default_rng([plan.seed, index])
+    row = Row(index, {})
+    try:
+        scene, row.redrawn = _scene(plan, index, rng, row.values)
+        result = any_scene.simulate(scene, **dict(plan.options))
+        found = result.as_dict()
+        row.outputs = {name: _number(keys.read_output(found, keys.parse_path(name)))
+                       for name in plan.outputs}
+        row.error_estimate = found["diagnostics"].get("error_estimate")
+    except (MassPropsError, KeyError) as exc:
+        row.status, row.error = "failed", error_message(exc) if isinstance(
+            exc, MassPropsError) else f"output {exc} missing from this run"
+    row.wall_time_s = time.perf_counter() - start
+    return row
+
+
+def run_chunk(plan: Plan, indices: list[int]) -> list[Row]:
+    """Samples ``indices`` in order (a worker's task)."""
+    return [run_sample(plan, i) for i in indices]
+
+
+def _number(value: Any) -> Any:
+    """A JSON-ready output: floats stay, non-finite become None (a run that ran away)."""
+    if isinstance(value, list):
+        return [_number(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _scene(plan: Plan, index: int, rng: np.random.Generator, said: dict) -> tuple[Any, int]:
+    """Sample ``index``'s scene and its mass-property redraws; its values into ``said``."""
+    nominal = _nominal(plan)
+    point = plan.grid[index // plan.draws]
+    grid = dict(zip((v.key for v in plan.grid_keys), point))
+    text_varies = [v for v in plan.varies if v.mass is None]
+    scene = nominal.scene
+    if text_varies:
+        scene = _rewritten(plan, text_varies, grid, rng, said)
+    redrawn = 0
+    for body in dict.fromkeys(v.mass.body for v in plan.varies if v.mass is not None):
+        changes = [(v.mass, _GridValue(grid[v.key]) if v.key in grid else v.spec)
+                   for v in plan.varies if v.mass is not None and v.mass.body == body]
+        scene, n = _with_body(scene, body, changes, rng, nominal.bounds, said)
+        redrawn += n
+    return scene, redrawn
+
+
+@dataclass(frozen=True)
+class _GridValue:
+    """A grid's value where a Spec is drawn (the mass of a grid over masses)."""
+
+    value: float
+
+    def draw(self, rng: np.random.Generator, nominal: float) -> float:
+        return self.value
+
+
+def _rewritten(plan: Plan, varies: list[Vary], grid: dict, rng, said: dict) -> Any:
+    root = compose(plan.text or "", plan.path)
+    assert root is not None
+    for v in varies:
+        place = keys.find(root, v.steps, plan.path)
+        value = grid[v.key] if v.key in grid else v.spec.draw(rng, keys.value_at(place))
+        keys.set_value(place, value)
+        said[v.key] = value
+    text = yaml.serialize(root)
+    return any_scene.parse(text, source=f"{plan.path} (sample values)",
+                           base_dir=Path(plan.path).parent)
+
+
+def _with_body(scene: Any, body: str | None, changes, rng, bounds, said: dict) -> tuple[Any, int]:
+    """``scene`` with one body's mass properties drawn (`inertials.draw_valid`)."""
+    if body is None:
+        rigid = scene.body
+        m, j, values, n = draw_valid(rng, changes, rigid.mass, rigid.inertia_body,
+                                     rigid.center_of_mass, bounds)
+        said.update(values)
+        new = type(rigid).from_inertia(m, j, rigid.center_of_mass, size=rigid.size)
+        return dataclasses.replace(scene, body=new), n
+    names = [b.name for b in scene.bodies] if any_scene.is_system(scene) else []
+    if body not in names:
+        raise SceneError(f"{scene.source}: sweep key bodies.{body}: the scene has no body "
+                         f"{body!r}" + (f" (its bodies: {', '.join(names)})" if names else ""))
+    k = names.index(body)
+    b = scene.bodies[k]
+    m, j, values, n = draw_valid(rng, changes, b.mass, b.inertia, np.zeros(3), None)
+    said.update(values)
+    bodies = list(scene.bodies)
+    bodies[k] = dataclasses.replace(b, mass=m, inertia=j)
+    return dataclasses.replace(scene, bodies=tuple(bodies)), n
+
+
+def check_plan(plan: Plan) -> Any:
+    """The scene read and every key found, before any sample runs: SceneError (exit 1) for a
+    scene or key that is not there, UsageError (exit 2) for a spec a key cannot take. Returns
+    the scene as written."""
+    nominal = _nominal(plan).scene
+    text_varies = [v for v in plan.varies if v.mass is None]
+    if text_varies and plan.text is None:
+        raise SceneError(f"{plan.path}: a robot description's own values cannot be varied by "
+                         f"key ({text_varies[0].key}); vary its links' mass or inertia "
+                         "(bodies.LINK.mass, bodies.LINK.inertia), or write a model: scene")
+    if text_varies:
+        root = compose(plan.text or "", plan.path)
+        for v in text_varies:
+            keys.find(root, v.steps, plan.path)
+    for v in plan.varies:
+        if v.mass is None:
+            continue
+        if v.mass.what == "inertia" and v.spec.kind != "relative":
+            raise UsageError(f"--vary {v.key}: an inertia tensor varies by relative:P only")
+        if v.mass.body is None and any_scene.is_system(nominal):
+            raise SceneError(f"{plan.path}: sweep key {v.key}: a system's bodies are "
+                             "bodies.NAME")
+        if v.mass.body is not None:
+            _with_body(nominal, v.mass.body, [], None, None, {})  # names the missing body
+    return nominal
