@@ -12,7 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from massprops.io import write_mesh
-from massprops.mesh import Mesh, fan_triangulate
+from massprops.mesh import Mesh
+from massprops.mesh.value import fan_triangulate
 
 HERE = Path(__file__).resolve().parent
 
@@ -96,6 +97,21 @@ def open_box() -> Mesh:
                 [q for q in BOX_QUADS if q != [4, 5, 7, 6]], "open_box")
 
 
+def cuboid_asset(path: Path) -> None:
+    """A glTF asset for `inspect --write-physics`: the 3×2×2 cuboid, axis-aligned and centred at
+    (1, 2, 3) in its mesh node's space (float32-exact), the node turned 30° about z in the
+    scene (the motion is written in node space, so the turn must not show in it)."""
+    import trimesh  # only this asset needs a glTF exporter
+
+    box = trimesh.Trimesh(box_vertices((3.0, 2.0, 2.0), (1.0, 2.0, 3.0)), BOX_TRIANGLES,
+                          process=False)
+    turn = np.eye(4)
+    turn[:3, :3] = rot_z(30.0)
+    scene = trimesh.Scene()
+    scene.add_geometry(box, node_name="cuboid", geom_name="cuboid", transform=turn)
+    path.write_bytes(scene.export(file_type="glb"))
+
+
 def main() -> None:
     cub = notes_cuboid()
     for ext in ("vf", "vtx", "obj", "stl"):
@@ -103,6 +119,7 @@ def main() -> None:
     for shape in (cube(), tetrahedron(), hexagonal_prism(), polyhedral_torus(),
                   overlapping_boxes(), open_box()):
         write_mesh(shape, HERE / f"{shape.name}.obj", force=True)
+    cuboid_asset(HERE / "cuboid.glb")
 
 
 if __name__ == "__main__":

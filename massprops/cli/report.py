@@ -338,9 +338,9 @@ def print_sweep(name: str, prepared, result: dict) -> None:
     _console.print(f"{cli_text(name)}: {result['samples']} samples, {result['failed']} failed"
                    + (f", {result['redrawn']} mass-property draws redrawn"
                       if result["redrawn"] else ""))
-    t = Table(title="outputs over the samples")
+    t = Table(box=None, padding=(0, 2), header_style="bold")
     for col in ("output", "mean", "± (mean)", "sd", "5 %", "50 %", "95 %"):
-        t.add_column(col, justify="left" if col == "output" else "right")
+        t.add_column(Text(col), justify="left" if col == "output" else "right", no_wrap=True)
     for output, stats in result["summary"].items():
         if stats is None:
             _row(t, output, "none ran", "", "", "", "", "")
