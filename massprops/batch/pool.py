@@ -23,13 +23,19 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def local_pool(jobs: int) -> ProcessPoolExecutor:
+INSPECT_PRELOAD = ("massprops.batch.worker", "massprops.inspection.file")
+"""What a batch's fork server imports before its workers fork: numpy and the mesh code."""
+
+
+def local_pool(jobs: int, preload: tuple[str, ...] = INSPECT_PRELOAD) -> ProcessPoolExecutor:
     """``jobs`` worker processes that ignore Ctrl-C (see `worker.init_local_worker`).
 
     Start method: a fork server where the platform has one. Its workers fork from a clean
-    server that imported numpy and massprops once (~0.2 s once per batch), never from
-    this process: forking a process with threads (numpy's BLAS, a caller's) can deadlock, and a
-    fork would copy unflushed output. Elsewhere (Windows) fresh interpreters (spawn)."""
+    server that imported the modules ``preload`` names once (numpy and the mesh code: ~0.2 s
+    once per batch), never from this process: forking a process with threads (numpy's BLAS, a
+    caller's) can deadlock, and a fork would copy unflushed output. Elsewhere (Windows) fresh
+    interpreters (spawn). The first pool of a process starts its server: a later pool's
+    ``preload`` is what that server imported."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
@@ -38,8 +44,8 @@ def local_pool(jobs: int) -> ProcessPoolExecutor:
         from multiprocessing import forkserver
 
         context = multiprocessing.get_context("forkserver")
-        # numpy and the mesh code imported once in the server, not again in every worker
-        context.set_forkserver_preload(["massprops.batch.worker", "massprops.inspection.file"])
+        # imported once in the server, not again in every worker
+        context.set_forkserver_preload(list(preload))
         forkserver.ensure_running()  # boots in the background until the first worker is due
     else:
         context = multiprocessing.get_context("spawn")

@@ -13,9 +13,6 @@ from massprops.cli.common import RegistryChoice, emit_json, guarded, positive, s
 from massprops.cli.dynamics import _integrator_names
 
 _ROWS_EXTENSIONS = {"csv": (".csv",), "json": (".jsonl", ".json")}
-_POOL_AFTER_S = 2.0
-"""Without --jobs, samples whose runs add up to more than this (judged by a warm nominal run, s)
-go to a pool of every core; a shorter sweep runs here (a pool's start costs about a second)."""
 
 
 class _Counter:
@@ -92,11 +89,11 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
 
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
-        # deferred: each command imports only what it runs (start-up of the others)
+        from massprops.batch.pool import end_helper_processes, stop_pool
         from massprops.dynamics.compiled.compiling import whole_process
         from massprops.io.atomic import OutputKind, atomic_write_bytes, check_output
-        from massprops.sweep import prepare, run_sweep, summarize
-        from massprops.sweep import table as csv_table
+        from massprops.sweep import prepare, summarize
+        from massprops.sweep.run import start_pool
 
         rows_format = fmt or ("json" if output_path and output_path.endswith((".json",
                                                                               ".jsonl"))
@@ -108,62 +105,37 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
         options: dict[str, Any] = {"estimate": not no_estimate}
         options.update({k: v for k, v in (("integrator", integrator), ("rtol", rtol),
                                           ("step", step)) if v is not None})
-        prepared = prepare(scene_path, varies, samples=samples, seed=seed,
-                           outputs=outputs.split(",") if outputs else None, options=options,
-                           notice=say_note)
-        executor, workers, client = None, None, None
+        executor: Any = None
+        workers, client = None, None
         if scheduler is not None:
             from massprops.batch import dask_executor  # deferred: only --scheduler
 
             executor, workers, client = dask_executor(scheduler)
-        if jobs is None and executor is None:
-            from massprops.batch import default_jobs  # deferred: only without --jobs
-
-            # a run with its error estimate already keeps two cores busy (its companions run
-            # on a helper thread): a worker per core would only take turns with them
-            cores = default_jobs() // (1 if no_estimate else 2)
-            pooled = prepared.sample_s * prepared.plan.count > _POOL_AFTER_S
-            n_jobs = max(1, cores) if pooled else 1
-        else:
-            n_jobs = jobs or 1
-        rows, lines = [], []
-        to_file = output_path is not None
-        if rows_format == "csv":
-            lines.append(csv_table.csv_line(csv_table.header(prepared)))
-            if not to_file and fmt is not None:
-                click.echo(lines[-1])
-        counter = _Counter(prepared.plan.count, not quiet and sys.stderr.isatty())
-        sweeping = run_sweep(prepared, jobs=n_jobs, executor=executor, workers=workers)
+        elif jobs is not None and jobs > 1:  # its workers boot while the scene is read and run
+            executor, workers = start_pool(jobs), jobs
         try:
-            for row in sweeping:
-                rows.append(row)
-                counter.step()
-                line = (csv_table.csv_line(csv_table.cells(prepared, row))
-                        if rows_format == "csv" else _json_line(row.as_dict()))
-                lines.append(line)
-                if not to_file and fmt is not None:
-                    click.echo(line)
-        except KeyboardInterrupt:
-            state["interrupted"] = True
+            prepared = prepare(scene_path, varies, samples=samples, seed=seed,
+                               outputs=outputs.split(",") if outputs else None,
+                               options=options, notice=say_note)
+            rows, lines, interrupted = _rows(prepared, jobs, executor, workers, rows_format,
+                                             fmt is not None and not output_path, quiet)
         finally:
-            sweeping.close()
-            counter.close()
             if client is not None:
                 client.close()
-            # deferred: the pool's helpers, stopped where a pool may have started them
-            from massprops.batch.pool import end_helper_processes
-
+            elif executor is not None:
+                stop_pool(executor)
             end_helper_processes()
+        state["interrupted"] = interrupted
         result = summarize(rows, prepared.plan.outputs, [v.key for v in prepared.plan.varies])
         # the summary: after JSON rows, in their stream; on stderr beside CSV rows; as a table
         # when no format was asked for (the rows then only in --output)
-        if to_file:
+        if output_path:
             text = "\n".join(lines) + "\n"
             if rows_format == "json":
                 text += _json_line(result) + "\n"
             atomic_write_bytes(output_path, text.encode(), force=force,  # type: ignore[arg-type]
                                protect=[scene_path])
-        if fmt == "json" and not to_file:
+        if fmt == "json" and not output_path:
             emit_json(result)
         elif fmt == "csv":
             click.echo(_json_line(result), err=True)
@@ -181,6 +153,35 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
     elif state["failed"] and code == 0:
         code = 3
     ctx.exit(code)
+
+
+def _rows(prepared: Any, jobs: int | None, executor: Any, workers: int | None,
+          rows_format: str, echo: bool, quiet: bool) -> tuple[list, list[str], bool]:
+    """Run the sweep: (its rows, their lines in ``rows_format``, whether Ctrl-C stopped it);
+    each line printed as its row comes where ``echo``."""
+    from massprops.sweep import run_sweep  # deferred: with the command's other imports
+    from massprops.sweep import table as csv_table
+
+    rows: list = []
+    lines = [csv_table.csv_line(csv_table.header(prepared))] if rows_format == "csv" else []
+    if echo and lines:
+        click.echo(lines[0])
+    counter = _Counter(prepared.plan.count, not quiet and sys.stderr.isatty())
+    sweeping = run_sweep(prepared, jobs=jobs, executor=executor, workers=workers)
+    try:
+        for row in sweeping:
+            rows.append(row)
+            counter.step()
+            lines.append(csv_table.csv_line(csv_table.cells(prepared, row))
+                         if rows_format == "csv" else _json_line(row.as_dict()))
+            if echo:
+                click.echo(lines[-1])
+    except KeyboardInterrupt:
+        return rows, lines, True
+    finally:
+        sweeping.close()
+        counter.close()
+    return rows, lines, False
 
 
 def _json_line(obj: dict) -> str:

@@ -12,9 +12,8 @@ from __future__ import annotations
 import itertools
 import os
 from collections.abc import Callable, Generator, Sequence
-from concurrent.futures import Executor, Future
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from massprops.dynamics import any_scene
 from massprops.dynamics.scene import scene_text
@@ -23,6 +22,15 @@ from massprops.errors import UsageError
 from massprops.sweep import keys
 from massprops.sweep.sample import Plan, Row, Vary, check_plan, mass_change, run_chunk
 from massprops.sweep.specs import parse_spec
+
+if TYPE_CHECKING:  # concurrent.futures (and logging) load only when a pool is used
+    from concurrent.futures import Executor, Future, ProcessPoolExecutor
+
+SWEEP_PRELOAD = ("massprops.batch.worker", "massprops.sweep.sample",
+                 "massprops.dynamics.systems.robot_scene", "massprops.dynamics.systems.run",
+                 "massprops.dynamics.simulate", "massprops.dynamics.compiled.systems_kernel")
+"""What a local pool's fork server imports before its workers fork: the sweep, both kinds of
+scene and run, and numba with the kernels' dispatchers (~0.5 s a worker would each pay)."""
 
 MAX_SAMPLES = 10_000_000
 """A sweep's samples at most (a typo's 1e12 is refused, not started)."""
@@ -76,7 +84,8 @@ def prepare(path: str | os.PathLike, varies: Sequence[str], *, samples: int | No
     described = tuple(sorted((k, tuple(sorted(v.items())) if isinstance(v, dict) else v)
                              for k, v in (description or {}).items()))
     run_options = tuple(sorted((options or {}).items()))
-    plan = Plan(source, text, parsed, seed, draws, grid, (), run_options, described)
+    folder = os.path.dirname(os.path.abspath(source))
+    plan = Plan(source, text, parsed, seed, draws, grid, (), run_options, described, folder)
     scene = check_plan(plan)
     any_scene.simulate(scene, notice=notice, **dict(run_options))  # compiles or loads kernels
     result = any_scene.simulate(scene, **dict(run_options))
@@ -89,7 +98,7 @@ def prepare(path: str | os.PathLike, varies: Sequence[str], *, samples: int | No
         except KeyError:
             raise UsageError(f"--outputs {name}: a run of {source} has no such output (its "
                              f"defaults: {', '.join(default_outputs(found))})") from None
-    plan = Plan(source, text, parsed, seed, draws, grid, names, run_options, described)
+    plan = Plan(source, text, parsed, seed, draws, grid, names, run_options, described, folder)
     return Prepared(plan, nominal, float(found["wall_time_s"]))
 
 
@@ -112,12 +121,41 @@ def chunk_size(count: int, workers: int) -> int:
     return max(1, min(50, count // max(1, 8 * workers)))
 
 
-def run_sweep(prepared: Prepared, *, jobs: int = 1, executor: Executor | None = None,
+POOL_AFTER_S = 2.0
+"""`auto_jobs`: samples whose runs add up to more than this (s, judged by a warm nominal run)
+go to a pool; a shorter sweep runs in this process (a pool's start costs ~0.5-1 s)."""
+
+
+def auto_jobs(prepared: Prepared) -> int:
+    """Workers for a sweep that names none: one per core, or one per two cores while each run's
+    error-estimate companions keep a second core busy (on a helper thread; a worker per core
+    would take turns with them), when the runs add up to more than POOL_AFTER_S; else 1."""
+    from massprops.batch.pool import default_jobs  # deferred: the pool's side, as below
+
+    if prepared.sample_s * prepared.plan.count <= POOL_AFTER_S:
+        return 1
+    estimate = dict(prepared.plan.options).get("estimate", True)
+    return max(1, default_jobs() // (2 if estimate else 1))
+
+
+def start_pool(jobs: int) -> ProcessPoolExecutor:
+    """A local pool for a sweep, started before `prepare` so that its fork server imports the
+    dynamics (SWEEP_PRELOAD) while this process reads and runs the scene; pass it to
+    `run_sweep` as ``executor`` and stop it with `batch.pool.stop_pool`."""
+    from massprops.batch.pool import local_pool  # deferred: the pool's side, as below
+
+    return local_pool(jobs, SWEEP_PRELOAD)
+
+
+def run_sweep(prepared: Prepared, *, jobs: int | None = 1, executor: Executor | None = None,
               workers: int | None = None) -> Generator[Row, None, None]:
     """Every sample's row, in sample order: in this process (``jobs`` 1, no executor), a local
-    pool of ``jobs`` processes, or ``executor`` (a Dask client's, ``workers`` its threads).
-    Closing the iterator (Ctrl-C in the caller) stops the pool; the rows given stand."""
+    pool of ``jobs`` processes (None: `auto_jobs`), or ``executor`` (a Dask client's, or
+    `start_pool`'s; ``workers`` its workers). Closing the iterator (Ctrl-C in the caller) stops
+    a pool it started; the rows given stand."""
     plan = prepared.plan
+    if jobs is None:
+        jobs = auto_jobs(prepared)
     if executor is None and jobs <= 1:
         for i in range(plan.count):
             yield run_chunk(plan, [i])[0]
@@ -125,7 +163,7 @@ def run_sweep(prepared: Prepared, *, jobs: int = 1, executor: Executor | None = 
     # deferred: a sweep run here never loads the pool's side (concurrent.futures, logging)
     from massprops.batch.pool import local_pool, stop_pool
 
-    pool = executor if executor is not None else local_pool(jobs)
+    pool = executor if executor is not None else local_pool(jobs, SWEEP_PRELOAD)
     size = chunk_size(plan.count, workers or jobs)
     starts = iter(range(0, plan.count, size))
     window: list[Future] = []

@@ -12,9 +12,9 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import os
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -54,6 +54,9 @@ class Plan:
     outputs: tuple[str, ...]
     options: tuple[tuple[str, Any], ...] = ()
     description: tuple[tuple[str, Any], ...] = ()
+    folder: str = "."
+    """The scene file's folder, absolute: where its relative paths start, for a worker in any
+    directory (a Dask worker's is its own)."""
 
     @property
     def count(self) -> int:
@@ -105,10 +108,12 @@ def load(plan: Plan) -> Any:
     """The scene as written (no value varied)."""
     if plan.text is None:
         opts = dict(plan.description)
-        return any_scene.load(plan.path, opts.get("duration"),
+        here = plan.path if os.path.exists(plan.path) else os.path.join(  # a worker elsewhere
+            plan.folder, os.path.basename(plan.path))
+        return any_scene.load(here, opts.get("duration"),
                               package_paths=opts.get("package_paths", ()),
                               xacro_args=opts.get("xacro_args"))
-    return any_scene.parse(plan.text, source=plan.path, base_dir=Path(plan.path).parent)
+    return any_scene.parse(plan.text, source=plan.path, base_dir=plan.folder)
 
 
 @functools.lru_cache(maxsize=2)
@@ -199,7 +204,7 @@ def _rewritten(plan: Plan, varies: list[Vary], grid: dict, rng, said: dict) -> A
         said[v.key] = value
     text = yaml.serialize(root)
     return any_scene.parse(text, source=f"{plan.path} (sample values)",
-                           base_dir=Path(plan.path).parent)
+                           base_dir=plan.folder)
 
 
 def _with_body(scene: Any, body: str | None, changes, rng, bounds, said: dict) -> tuple[Any, int]:
