@@ -233,3 +233,33 @@ def test_a_bad_key_or_spec_is_one_line(run, tmp_path, vary, code, said):
     assert res.exit_code == code
     assert said in res.stderr and len(res.stderr.strip().splitlines()) == 1
     assert "Traceback" not in res.stderr
+
+
+@pytest.mark.timeout(120)
+def test_linear_derivatives_are_the_closed_forms_within_their_own_accuracy(tmp_path):
+    from massprops.sweep.linear import linearize
+
+    l0, sd = 0.3, 0.002
+    key = "bodies.rod.position[2]"
+    prepared = prepare(pendulum(tmp_path, l0), [f"{key}=normal:{-l0}:{sd}",
+                                                "bodies.rod.mass=relative:3%"],
+                       samples=2, outputs=[OUT], options={"estimate": False})
+    found = linearize(prepared.plan)[OUT]
+    h = 1e-6
+    slope = -(theta(l0 + h) - theta(l0 - h)) / (2 * h)
+    got, accuracy = found["derivative"][key][0], found["accuracy"][key][0]
+    assert abs(got - slope) <= max(accuracy, 1e-9 * abs(slope))
+    assert accuracy < 1e-3 * abs(slope)  # the bar is tight, not a shrug
+    # the mass carries its inertia: the motion does not depend on it
+    assert abs(found["derivative"]["bodies.rod.mass"][0]) <= \
+        found["accuracy"]["bodies.rod.mass"][0] + 1e-12
+    assert found["sd"][0] == pytest.approx(abs(slope) * sd, rel=1e-3)
+
+
+@pytest.mark.timeout(120)
+def test_linear_in_the_json_summary(run, tmp_path):
+    res = run("sweep", pendulum(tmp_path), "--vary", "bodies.rod.position[2]=normal:-0.3:0.002",
+              "--samples", "4", "--json", "--linear", "--no-estimate", "--outputs", OUT)
+    assert res.exit_code == 0, res.stderr
+    summary = json_lines(res.stdout)[-1]
+    assert set(summary["linear"][OUT]) == {"derivative", "accuracy", "sd"}

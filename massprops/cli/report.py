@@ -353,3 +353,13 @@ def print_sweep(name: str, prepared, result: dict) -> None:
             _row(t, label, fmt(float(mean[i]), u if math.isfinite(u) else 0.0), f"{u:.2g}",
                  *(f"{float(np.ravel(stats[k])[i]):.6g}" for k in ("sd", "p05", "p50", "p95")))
     _print_table(t)
+    for output, lin in (result.get("linear") or {}).items():
+        for key, d in lin["derivative"].items():
+            if d is not None:
+                acc = np.ravel(np.asarray(lin["accuracy"][key], dtype=float))
+                shown = ", ".join(f"{x:.6g} ± {a:.2g}" for x, a in
+                                  zip(np.ravel(np.asarray(d, dtype=float)), acc))
+                _console.print(f"d {output} / d {key} = {shown}", soft_wrap=True)
+        if lin["sd"] is not None:
+            sd = ", ".join(f"{x:.6g}" for x in np.ravel(np.asarray(lin["sd"], dtype=float)))
+            _console.print(f"{output}: the delta method's sd {sd}", soft_wrap=True)

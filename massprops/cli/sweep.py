@@ -67,6 +67,10 @@ class _Counter:
               help="Overrides the scene's time.integrator.")
 @click.option("--rtol", type=float, callback=positive, help="Tolerance of adaptive methods.")
 @click.option("--step", type=float, callback=positive, help="Step of fixed-step methods [s].")
+@click.option("--linear", is_flag=True,
+              help="Add each output's derivative by each drawn value at the draws' centres, by "
+                   "central differences of the engine's own runs, with its accuracy, and the "
+                   "spread the delta method predicts from them.")
 @click.option("--no-estimate", is_flag=True,
               help="Leave out each run's error estimate (about half the time).")
 @click.option("--force", is_flag=True, help="Replace an existing --output file.")
@@ -75,8 +79,8 @@ class _Counter:
 def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples: int | None,
           seed: int, jobs: int | None, scheduler: str | None, outputs: str | None,
           as_json: bool, out_format: str | None, output_path: str | None,
-          integrator: str | None, rtol: float | None, step: float | None, no_estimate: bool,
-          force: bool, quiet: bool) -> None:
+          integrator: str | None, rtol: float | None, step: float | None, linear: bool,
+          no_estimate: bool, force: bool, quiet: bool) -> None:
     """Run SCENE once per sample with the --vary values drawn; print one row per sample and
     a summary: each output's spread and its sensitivity to each value."""
     if as_json and out_format == "csv":
@@ -127,6 +131,10 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
             end_helper_processes()
         state["interrupted"] = interrupted
         result = summarize(rows, prepared.plan.outputs, [v.key for v in prepared.plan.varies])
+        if linear and not interrupted:
+            from massprops.sweep.linear import linearize  # deferred: only --linear
+
+            result["linear"] = linearize(prepared.plan)
         # the summary: after JSON rows, in their stream; on stderr beside CSV rows; as a table
         # when no format was asked for (the rows then only in --output)
         if output_path:

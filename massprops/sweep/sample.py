@@ -139,7 +139,7 @@ def run_sample(plan: Plan, index: int) -> Row:
     rng = np.random.default_rng([plan.seed, index])
     row = Row(index, {})
     try:
-        scene, row.redrawn = _scene(plan, index, rng, row.values)
+        scene, row.redrawn = _scene(plan, grid_values(plan, index), rng, row.values)
         result = any_scene.simulate(scene, **dict(plan.options))
         found = result.as_dict()
         row.outputs = {name: _number(keys.read_output(found, keys.parse_path(name)))
@@ -166,18 +166,50 @@ def _number(value: Any) -> Any:
     return value
 
 
-def _scene(plan: Plan, index: int, rng: np.random.Generator, said: dict) -> tuple[Any, int]:
-    """Sample ``index``'s scene and its mass-property redraws; its values into ``said``."""
+def scene_value(plan: Plan, vary: Vary) -> float | None:
+    """The value the scene writes at ``vary``'s key (a body's mass as read), None for an
+    inertia tensor."""
+    if vary.mass is not None:
+        if vary.mass.what != "mass":
+            return None
+        scene = _nominal(plan).scene
+        if vary.mass.body is None:
+            return float(scene.body.mass)
+        return float(next(b.mass for b in scene.bodies if b.name == vary.mass.body))
+    root = compose(plan.text or "", plan.path)
+    assert root is not None
+    return keys.value_at(keys.find(root, vary.steps, plan.path))
+
+
+def grid_values(plan: Plan, index: int) -> dict[str, float]:
+    """The grid keys' values of sample ``index`` (its design point)."""
+    return dict(zip((v.key for v in plan.grid_keys), plan.grid[index // plan.draws]))
+
+
+def run_at(plan: Plan, values: dict[str, float]) -> Row:
+    """The scene run with every key at ``values`` (nothing drawn): `linear`'s runs."""
+    start = time.perf_counter()
+    row = Row(-1, {})
+    scene, _ = _scene(plan, values, np.random.default_rng(0), row.values)
+    found = any_scene.simulate(scene, **dict(plan.options)).as_dict()
+    row.outputs = {name: keys.read_output(found, keys.parse_path(name)) for name in plan.outputs}
+    row.error_estimate = found["diagnostics"].get("error_estimate")
+    row.wall_time_s = time.perf_counter() - start
+    return row
+
+
+def _scene(plan: Plan, fixed: dict[str, float], rng: np.random.Generator,
+           said: dict) -> tuple[Any, int]:
+    """The scene with the keys in ``fixed`` at those values and the others drawn, and its
+    mass-property redraws; every key's value into ``said``."""
     nominal = _nominal(plan)
-    point = plan.grid[index // plan.draws]
-    grid = dict(zip((v.key for v in plan.grid_keys), point))
     text_varies = [v for v in plan.varies if v.mass is None]
     scene = nominal.scene
     if text_varies:
-        scene = _rewritten(plan, text_varies, grid, rng, said)
+        scene = _rewritten(plan, text_varies, fixed, rng, said)
     redrawn = 0
     for body in dict.fromkeys(v.mass.body for v in plan.varies if v.mass is not None):
-        changes = [(v.mass, _GridValue(grid[v.key]) if v.key in grid else v.spec)
+        changes = [(v.mass, _GridValue(fixed[v.key]) if v.key in fixed else v.spec)
                    for v in plan.varies if v.mass is not None and v.mass.body == body]
         scene, n = _with_body(scene, body, changes, rng, nominal.bounds, said)
         redrawn += n
@@ -186,7 +218,7 @@ def _scene(plan: Plan, index: int, rng: np.random.Generator, said: dict) -> tupl
 
 @dataclass(frozen=True)
 class _GridValue:
-    """A grid's value where a Spec is drawn (the mass of a grid over masses)."""
+    """A given value where a Spec is drawn (the mass of a grid over masses)."""
 
     value: float
 
@@ -194,12 +226,12 @@ class _GridValue:
         return self.value
 
 
-def _rewritten(plan: Plan, varies: list[Vary], grid: dict, rng, said: dict) -> Any:
+def _rewritten(plan: Plan, varies: list[Vary], fixed: dict, rng, said: dict) -> Any:
     root = compose(plan.text or "", plan.path)
     assert root is not None
     for v in varies:
         place = keys.find(root, v.steps, plan.path)
-        value = grid[v.key] if v.key in grid else v.spec.draw(rng, keys.value_at(place))
+        value = fixed[v.key] if v.key in fixed else v.spec.draw(rng, keys.value_at(place))
         keys.set_value(place, value)
         said[v.key] = value
     text = yaml.serialize(root)

@@ -40,6 +40,20 @@ class Spec:
             return float(nominal * (1.0 + a[0] * rng.standard_normal()))
         raise ValueError("a grid is not drawn")  # the caller takes its values in turn
 
+    def centre(self, nominal: float) -> float | None:
+        """Where the draws centre (the mean; a lognormal's median), None for a grid."""
+        a = self.numbers
+        return {"normal": a[0], "uniform": 0.5 * (a[0] + a[-1]), "lognormal": a[0],
+                "relative": nominal}.get(self.kind)
+
+    def spread(self, nominal: float) -> float | None:
+        """The draws' standard deviation (a lognormal's: of its log times its median, the
+        first-order spread), None for a grid."""
+        a = self.numbers
+        return {"normal": a[-1], "uniform": (a[-1] - a[0]) / math.sqrt(12),
+                "lognormal": a[0] * math.log(a[-1]),
+                "relative": abs(nominal) * a[0]}.get(self.kind)
+
     @property
     def relative_sd(self) -> float:
         """P of ``relative:P`` (a fraction)."""
