@@ -48,10 +48,11 @@ time: {{duration: {DURATION}, rtol: 1e-11}}
 
 
 def theta(arm: float, t: float = DURATION) -> float:
-    """The hinge angle at t of the small-amplitude pendulum with its centre ``arm`` below the hinge:
-    Lindstedt's frequency ω (1 − θ0²/16); the third harmonic left out is θ0³/192 ~ 5e-12."""
-    omega = math.sqrt(M * G * arm / (I_ROD + M * arm * arm)) * (1 - THETA0 ** 2 / 16)
-    return THETA0 * math.cos(omega * t)
+    """The hinge angle at t of the small-amplitude pendulum with its centre ``arm`` below the
+    hinge, Lindstedt-Poincaré to third order: τ = ω (1 − θ0²/16) t,
+    θ = θ0 cos τ + θ0³/192 (cos τ − cos 3τ) (what is left is O(θ0⁵) ~ 1e-15 here)."""
+    tau = math.sqrt(M * G * arm / (I_ROD + M * arm * arm)) * (1 - THETA0 ** 2 / 16) * t
+    return THETA0 * math.cos(tau) + THETA0 ** 3 / 192 * (math.cos(tau) - math.cos(3 * tau))
 
 
 def rows_of(prepared, **kw):
@@ -263,3 +264,31 @@ def test_linear_in_the_json_summary(run, tmp_path):
     assert res.exit_code == 0, res.stderr
     summary = json_lines(res.stdout)[-1]
     assert set(summary["linear"][OUT]) == {"derivative", "accuracy", "sd"}
+
+
+@pytest.mark.timeout(120)
+def test_each_samples_series_is_its_pendulum_at_every_time(tmp_path):
+    prepared = prepare(pendulum(tmp_path), ["bodies.rod.position[2]=uniform:-0.5:-0.2"],
+                       samples=4, seed=8, outputs=[OUT], options={"estimate": False},
+                       series=True)
+    for row in rows_of(prepared):
+        arm = -row.values["bodies.rod.position[2]"]
+        assert row.times[0] == 0.0 and row.times[-1] == pytest.approx(DURATION)
+        angles = [v[0] for v in row.series[OUT]]
+        want = [theta(arm, t) for t in row.times]
+        np.testing.assert_allclose(angles, want, rtol=0, atol=1e-8 * THETA0)
+        assert row.series[OUT][-1] == row.outputs[OUT]
+
+
+@pytest.mark.timeout(120)
+def test_plot_writes_a_png_and_never_over_the_scene(run, tmp_path):
+    pytest.importorskip("matplotlib")
+    scene = pendulum(tmp_path)
+    png = tmp_path / "bands.png"
+    res = run("sweep", scene, "--vary", "bodies.rod.position[2]=uniform:-0.5:-0.2",
+              "--samples", "5", "--no-estimate", "--plot", png, "--outputs", OUT)
+    assert res.exit_code == 0, res.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    again = run("sweep", scene, "--vary", "bodies.rod.position[2]=uniform:-0.5:-0.2",
+                "--samples", "5", "--plot", png)
+    assert again.exit_code == 1 and "exists" in again.stderr  # checked before any run

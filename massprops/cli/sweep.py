@@ -67,6 +67,9 @@ class _Counter:
               help="Overrides the scene's time.integrator.")
 @click.option("--rtol", type=float, callback=positive, help="Tolerance of adaptive methods.")
 @click.option("--step", type=float, callback=positive, help="Step of fixed-step methods [s].")
+@click.option("--plot", "plot_path", default=None,
+              help="PNG of the outputs over time: the samples' median and 25-75 % and "
+                   "5-95 % bands (pip install 'massprops[plot]').")
 @click.option("--linear", is_flag=True,
               help="Add each output's derivative by each drawn value at the draws' centres, by "
                    "central differences of the engine's own runs, with its accuracy, and the "
@@ -79,7 +82,8 @@ class _Counter:
 def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples: int | None,
           seed: int, jobs: int | None, scheduler: str | None, outputs: str | None,
           as_json: bool, out_format: str | None, output_path: str | None,
-          integrator: str | None, rtol: float | None, step: float | None, linear: bool,
+          integrator: str | None, rtol: float | None, step: float | None,
+          plot_path: str | None, linear: bool,
           no_estimate: bool, force: bool, quiet: bool) -> None:
     """Run SCENE once per sample with the --vary values drawn; print one row per sample and
     a summary: each output's spread and its sensitivity to each value."""
@@ -105,6 +109,13 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
         kind = OutputKind("the rows", _ROWS_EXTENSIONS[rows_format], "output")
         if output_path:
             check_output(output_path, kind, force=force, protect=[scene_path])
+        if plot_path:
+            # deferred: matplotlib (the plot extra) loads only for --plot
+            from massprops.dynamics.plots import plot_output, require_matplotlib
+
+            require_matplotlib()
+            check_output(plot_path, plot_output(), force=force,
+                         protect=[scene_path, *([output_path] if output_path else [])])
         whole_process()
         options: dict[str, Any] = {"estimate": not no_estimate}
         options.update({k: v for k, v in (("integrator", integrator), ("rtol", rtol),
@@ -120,7 +131,8 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
         try:
             prepared = prepare(scene_path, varies, samples=samples, seed=seed,
                                outputs=outputs.split(",") if outputs else None,
-                               options=options, notice=say_note)
+                               options=options, series=plot_path is not None,
+                               notice=say_note)
             rows, lines, interrupted = _rows(prepared, jobs, executor, workers, rows_format,
                                              fmt is not None and not output_path, quiet)
         finally:
@@ -131,6 +143,11 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
             end_helper_processes()
         state["interrupted"] = interrupted
         result = summarize(rows, prepared.plan.outputs, [v.key for v in prepared.plan.varies])
+        if plot_path:
+            from massprops.sweep.plots import plot_sweep  # deferred: matplotlib
+
+            plot_sweep(rows, prepared.plan.outputs, plot_path, force=force,
+                       protect=[scene_path, *([output_path] if output_path else [])])
         if linear and not interrupted:
             from massprops.sweep.linear import linearize  # deferred: only --linear
 

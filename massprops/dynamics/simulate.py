@@ -73,6 +73,10 @@ class SimulationResult:
     interrupted: bool = False
     notes: tuple[str, ...] = field(default=())
 
+    def row(self, n: int) -> dict:
+        """Sample ``n``'s state as the contract's ``final`` object."""
+        return self.trajectory.row(n)
+
     def as_dict(self) -> dict:
         return {"integrator": self.integrator, "reason": self.reason, "steps": self.steps,
                 "evaluations": self.evaluations, "rejected_steps": self.rejected,

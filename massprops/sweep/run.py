@@ -32,6 +32,9 @@ SWEEP_PRELOAD = ("massprops.batch.worker", "massprops.sweep.sample",
 """What a local pool's fork server imports before its workers fork: the sweep, both kinds of
 scene and run, and numba with the kernels' dispatchers (~0.5 s a worker would each pay)."""
 
+SERIES_POINTS = 200
+"""Sample intervals of a run whose outputs are kept over time (``--plot``)."""
+
 MAX_SAMPLES = 10_000_000
 """A sweep's samples at most (a typo's 1e12 is refused, not started)."""
 
@@ -59,11 +62,12 @@ class Prepared:
 def prepare(path: str | os.PathLike, varies: Sequence[str], *, samples: int | None,
             seed: int = 0, outputs: Sequence[str] | None = None,
             options: dict[str, Any] | None = None, description: dict[str, Any] | None = None,
-            notice: Callable[[str], None] | None = None) -> Prepared:
+            series: bool = False, notice: Callable[[str], None] | None = None) -> Prepared:
     """The sweep of the scene at ``path`` (a YAML scene or a robot description) with ``varies``
     (``KEY=SPEC`` each), ``samples`` draws (per grid point; None: grids only, one each),
     ``outputs`` (names into a run's JSON, default `default_outputs`), ``options`` for
-    `any_scene.simulate` (integrator, rtol, step, max_steps, estimate). Runs the nominal scene
+    `any_scene.simulate` (integrator, rtol, step, max_steps, estimate); ``series``: every row
+    also carries its outputs at SERIES_POINTS + 1 times (for `plots`). Runs the nominal scene
     twice (``notice`` tells of a kernel compile; the second run is warm: what a sample costs).
     SceneError / RobotModelError (exit 1), UsageError (exit 2)."""
     parsed = tuple(parse_vary(v) for v in varies)
@@ -98,7 +102,9 @@ def prepare(path: str | os.PathLike, varies: Sequence[str], *, samples: int | No
         except KeyError:
             raise UsageError(f"--outputs {name}: a run of {source} has no such output (its "
                              f"defaults: {', '.join(default_outputs(found))})") from None
-    plan = Plan(source, text, parsed, seed, draws, grid, names, run_options, described, folder)
+    every = scene.time.duration / SERIES_POINTS if series else None
+    plan = Plan(source, text, parsed, seed, draws, grid, names, run_options, described, folder,
+                every)
     return Prepared(plan, nominal, float(found["wall_time_s"]))
 
 

@@ -57,6 +57,9 @@ class Plan:
     folder: str = "."
     """The scene file's folder, absolute: where its relative paths start, for a worker in any
     directory (a Dask worker's is its own)."""
+    series_every: float | None = None
+    """Where set, each run is sampled every this many seconds and its rows carry each output's
+    values over time (``Row.series``, for ``--plot``)."""
 
     @property
     def count(self) -> int:
@@ -79,6 +82,8 @@ class Row:
     error_estimate: float | None = None
     wall_time_s: float = 0.0
     redrawn: int = field(default=0)
+    times: list[float] | None = None
+    series: dict[str, list] | None = None  # output -> its value at each of ``times``
 
     def as_dict(self) -> dict[str, Any]:
         return {"sample": self.sample, "values": self.values, "status": self.status,
@@ -140,16 +145,33 @@ def run_sample(plan: Plan, index: int) -> Row:
     row = Row(index, {})
     try:
         scene, row.redrawn = _scene(plan, grid_values(plan, index), rng, row.values)
-        result = any_scene.simulate(scene, **dict(plan.options))
+        options = dict(plan.options)
+        if plan.series_every is not None:
+            options["every"] = plan.series_every
+        result = any_scene.simulate(scene, **options)
         found = result.as_dict()
         row.outputs = {name: _number(keys.read_output(found, keys.parse_path(name)))
                        for name in plan.outputs}
         row.error_estimate = found["diagnostics"].get("error_estimate")
+        if plan.series_every is not None:
+            row.times, row.series = _series(result, plan.outputs)
     except (MassPropsError, KeyError) as exc:
         row.status, row.error = "failed", error_message(exc) if isinstance(
             exc, MassPropsError) else f"output {exc} missing from this run"
     row.wall_time_s = time.perf_counter() - start
     return row
+
+
+def _series(result: Any, outputs: tuple[str, ...]) -> tuple[list[float], dict[str, list]]:
+    """The run's sample times and each output's value at them (a ``final.`` output read from
+    each sample's state; any other output, e.g. a diagnostic, has its one value)."""
+    states = [result.row(n) for n in range(any_scene.sample_count(result))]
+    series = {}
+    for name in outputs:
+        steps = keys.parse_path(name)
+        if steps[0] == "final":
+            series[name] = [_number(keys.read_output(state, steps[1:])) for state in states]
+    return [state["t"] for state in states], series
 
 
 def run_chunk(plan: Plan, indices: list[int]) -> list[Row]:

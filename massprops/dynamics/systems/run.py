@@ -70,28 +70,33 @@ class SystemResult:
     reason: str = REASONS["dop853"]
     interrupted: bool = False  # Ctrl-C stopped the run: the samples end where it got
 
-    def as_dict(self) -> dict:
+    def row(self, n: int) -> dict:
+        """Sample ``n``'s state as the contract's ``final`` object (the holding forces, which
+        are the final pose's, only there)."""
         s, sc = self.samples, self.scene
-        bodies = {b.name: {"position": s.position[-1, i].tolist(),
-                           "orientation": s.orientation[-1, i].tolist(),
-                           "velocity": s.velocity[-1, i].tolist(),
-                           "angular_velocity": s.angular_velocity[-1, i].tolist(),
-                           "angular_velocity_body": (quat_to_matrix(s.orientation[-1, i]).T
-                                                     @ s.angular_velocity[-1, i]).tolist()}
+        last = n in (-1, len(s.t) - 1)
+        bodies = {b.name: {"position": s.position[n, i].tolist(),
+                           "orientation": s.orientation[n, i].tolist(),
+                           "velocity": s.velocity[n, i].tolist(),
+                           "angular_velocity": s.angular_velocity[n, i].tolist(),
+                           "angular_velocity_body": (quat_to_matrix(s.orientation[n, i]).T
+                                                     @ s.angular_velocity[n, i]).tolist()}
                   for i, b in enumerate(sc.bodies)}
         joints = {j.name: {"type": j.kind, "bodies": [_name(sc, j.a), _name(sc, j.b)],
-                           "coordinates": s.coordinates[k][-1].tolist(),
-                           "rates": s.rates[k][-1].tolist(),
-                           "force": s.force[-1, k].tolist(), "torque": s.torque[-1, k].tolist(),
-                           **({} if self.holding is None else
+                           "coordinates": s.coordinates[k][n].tolist(),
+                           "rates": s.rates[k][n].tolist(),
+                           "force": s.force[n, k].tolist(), "torque": s.torque[n, k].tolist(),
+                           **({} if self.holding is None or not last else
                               {"holding": self.holding[k].tolist()})}
                   for k, j in enumerate(sc.joints)}
+        return {"t": float(s.t[n]), "bodies": bodies, "joints": joints}
+
+    def as_dict(self) -> dict:
         return {"integrator": self.integrator,
                 "reason": f"system: {self.reason}; projected onto the joints",
                 "steps": self.steps, "evaluations": self.evaluations,
                 "rejected_steps": self.rejected, "wall_time_s": self.wall_time_s,
-                "interrupted": self.interrupted,
-                "final": {"t": float(s.t[-1]), "bodies": bodies, "joints": joints},
+                "interrupted": self.interrupted, "final": self.row(-1),
                 "diagnostics": self.diagnostics}
 
 
