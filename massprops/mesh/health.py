@@ -24,6 +24,13 @@ from massprops.mesh.value import Mesh
 from massprops.mesh.weld import near_groups, weld
 from massprops.tolerances import EPS, EPS32, MAX_HOLE_AREA_FRACTION, NEAR_WELD_ULPS
 
+LOOSE_CAVITY = "is partly outside every solid part"
+"""The warning's words for an inward-facing piece not wholly inside a solid: the part outside
+is integrated with negative density (`massprops.robot.analyze` names it when the link's
+computed inertial then fails a validity test)."""
+OPEN_SURFACE = "an open surface encloses no defined volume"
+"""The warning's words for a mesh integrated open (``allow_open``)."""
+
 if TYPE_CHECKING:  # imported where a repair needs it: most meshes never do
     from massprops.mesh.nesting import Plan
 
@@ -213,7 +220,7 @@ def _open_warnings(mesh: Mesh, a: _Analysis, volume: float) -> list[str]:
            f"{_boundary_length(mesh, a):.6g} m); open area |Σ face area vectors| = "
            f"{np.linalg.norm(hole):.3g} m², {_percent(np.linalg.norm(hole), area)} of the surface "
            f"area (0 for a closed surface)",
-           f"an open surface encloses no defined volume: the result is the volume closed off by "
+           f"{OPEN_SURFACE}: the result is the volume closed off by "
            f"cones from the integration origin to each hole's rim; moving that origin across the "
            f"bounding box changes it by up to {spread:.3g} m³ ({_percent(spread, abs(volume))} of "
            f"the {volume:.6g} m³ computed about the box centre)"]
@@ -304,8 +311,8 @@ def _plan_warnings(plan: Plan, volumes: np.ndarray, quiet: np.ndarray, unioned: 
     out += _first_five([f"components {a + 1} and {b + 1} overlap (their surfaces cross: a point "
                         f"lies inside both): the volume they share is counted twice"
                         for a, b in ([] if unioned else plan.crossings)])
-    out += _first_five([f"component {c + 1} (a cavity: faces inward) is partly outside every "
-                        f"solid part: that part is subtracted from nothing" for c in plan.loose])
+    out += _first_five([f"component {c + 1} (a cavity: faces inward) {LOOSE_CAVITY}: that part "
+                        f"is subtracted from nothing" for c in plan.loose])
     return out
 
 

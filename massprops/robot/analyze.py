@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -383,6 +384,38 @@ class _OtherGeometry:
                  c.mass, c.center_of_mass, c.inertia)]
 
 
+def _invalid_warning(validity: Validity, link: Link, parts: Sequence) -> str:
+    """One line for a link whose computed inertial fails a validity test: the test, and the
+    mesh and defect that make an integral of the geometry do that (a positive density, however
+    overlapped, never fails them): inward-facing pieces partly outside every solid (counted there
+    with negative density), or an open surface integrated as it is."""
+    from massprops.mesh.health import LOOSE_CAVITY, OPEN_SURFACE  # the rare path only
+
+    bad = validity.problems
+    head = (f"computed inertial not valid, never written: {bad[0]}"
+            + (f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""))
+    causes = []
+    for g, part in zip(link.geometries, parts):
+        loose = [m.group(1) for w in part.warnings
+                 if (m := re.match(rf"component (\d+) \(a cavity: faces inward\) {LOOSE_CAVITY}",
+                                   w))]
+        if loose:
+            one = len(loose) == 1
+            which = (f"component {loose[0]} faces inward and is" if one else
+                     f"components {', '.join(loose)} face inward and are")
+            it = ("it counts", "it is a solid, its") if one else ("they count", "they are "
+                                                                   "solids, their")
+            causes.append(f"{g.uri}: {which} {LOOSE_CAVITY.removeprefix('is ')}, so {it[0]} "
+                          f"there with negative density (if {it[1]} faces are reversed in the "
+                          "file: fix them there)")
+        elif any(w.startswith(OPEN_SURFACE) for w in part.warnings):
+            causes.append(f"{g.uri}: an open surface integrated as it is "
+                          f"({setting_ref('allow_open')}), its signed volumes not a solid's")
+    if not causes:
+        return f"{head}; no defect of the geometry found to explain it"
+    return f"{head}: {'; '.join(causes)}"
+
+
 def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | None,
           source: str) -> LinkReport:
     warnings = list(link.warnings)
@@ -447,6 +480,9 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         comparison = compare(stated, computed)
     if not np.isfinite(computed.inertia).all():
         return skipped("the computed inertia is not finite", True)
+    validity = judge(computed.mass, computed.center_of_mass, computed.inertia, computed.bounds)
+    if not validity.ok:
+        warnings.append(_invalid_warning(validity, link, parts))
     return LinkReport(link, "computed", None, False, computed, comparison, tuple(warnings),
                       repaired or None,
                       shapes=lambda: shape_bases(link.geometries, parts, meshes, split))
