@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from massprops.errors import DegenerateMeshError, MeshFormatError, MeshTopologyError, setting_ref
+from massprops.errors import MeshFormatError, MeshTopologyError, NoVolumeError, setting_ref
 from massprops.mesh.geometry import area_vector_sums, exactly_flat, signed_volumes6
 from massprops.mesh.topology import Edges, connected_components, consistent_flips, edges, is_soup
 from massprops.mesh.value import Mesh
@@ -494,7 +494,7 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
     if a.edges.count("open"):
         mesh, a, cracks, crack_notes = _close_cracks(mesh, a)
     if np.count_nonzero(a.used) < 4:
-        raise DegenerateMeshError(f"{mesh.name}: the faces span only {np.count_nonzero(a.used)} "
+        raise NoVolumeError(f"{mesh.name}: the faces span only {np.count_nonzero(a.used)} "
                                   f"distinct vertex positions (zero-area faces aside); a solid "
                                   f"needs at least 4")
     volumes = _component_volumes(a, a.det6)
