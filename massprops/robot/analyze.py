@@ -461,8 +461,8 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         parts.append(part)
         used.append(g)
     if sheets and not parts:
-        g, exc = sheets[0]
-        return skipped(f"{g.uri or g.kind} (line {g.node.line}): {error_message(exc)}", True)
+        g, flat = sheets[0]
+        return skipped(f"{g.uri or g.kind} (line {g.node.line}): {error_message(flat)}", True)
     warnings.extend(f"{g.uri}: encloses no volume (a sheet or slivers): counted as zero volume "
                     "beside the link's other geometry" for g, _exc in sheets)
     stated = link.stated
