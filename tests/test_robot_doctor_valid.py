@@ -190,3 +190,33 @@ def test_romeo_wrist_with_its_faces_reversed_in_the_file_is_valid(tmp_path, run)
     assert np.allclose(row["computed"]["inertia"], 2 / vol * j, rtol=0, atol=1e-12)
     assert all(row["computed"]["valid"].values())
     assert not any(w.startswith("computed inertial not valid") for w in row["warnings"])
+
+
+def test_an_open_mesh_integrated_as_it_is_is_named_as_the_cause(tmp_path, run):
+    """--allow-open: a closed cube [-0.1, 0.1]³ and two loose squares 0.1 wide at z = ±0.5 facing
+    the origin. Integrated about the box centre (the origin), each square closes off a pyramid of
+    negative volume with its apex there; the closed form of cube less both pyramids."""
+    out = [f"v {x} {y} {z}" for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)]
+    out += [f"f {' '.join(str(i + 1) for i in f)}" for f in _FACES]
+    for k, z in enumerate((0.5, -0.5)):
+        b = 9 + 4 * k
+        out += [f"v -0.05 -0.05 {z}", f"v 0.05 -0.05 {z}", f"v 0.05 0.05 {z}", f"v -0.05 0.05 {z}"]
+        quad = [(b, b + 1, b + 2), (b, b + 2, b + 3)]
+        out += [f"f {' '.join(map(str, t[::-1] if z > 0 else t))}" for t in quad]
+    (tmp_path / "part.obj").write_text("\n".join(out) + "\n")
+    (tmp_path / "r.urdf").write_text(
+        '<robot name="r"><link name="flap"><inertial><mass value="1"/><inertia ixx="0.01" '
+        'ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial><collision><geometry>'
+        '<mesh filename="part.obj"/></geometry></collision></link></robot>')
+    row = json.loads(run("model", tmp_path / "r.urdf", "--json", "--allow-open").stdout)
+    a, h, side = 0.1, 0.5, 0.2
+    vol = side**3 - 2 * a * a * h / 3
+    sxx = side**3 * side**2 / 12 - 2 * a**4 * h / 60  # ∫x² dV: cube less both pyramids
+    szz = side**3 * side**2 / 12 - 2 * a**2 * h**3 / 5
+    j = np.diag([sxx + szz, sxx + szz, 2 * sxx]) / vol  # m = 1 kg
+    assert np.allclose(row["computed"]["inertia"], j, rtol=0, atol=1e-12)
+    assert row["computed"]["valid"]["positive_definite"] is False
+    said = [w for w in row["warnings"] if w.startswith("computed inertial not valid")]
+    assert len(said) == 1 and said[0].endswith(
+        "part.obj: an open surface integrated as it is (--allow-open), its signed volumes not a "
+        "solid's")
