@@ -6,10 +6,12 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from massprops.inertia import parallel_axis, parallel_axis_to_com, rotate_inertia
+from massprops.robot.analyze import analyze_model
 from massprops.robot.doctor.bounds import bounds_of, primitive_points
 from massprops.robot.doctor.validity import judge
 from massprops.rotation import quat_to_matrix
@@ -220,3 +222,18 @@ def test_an_open_mesh_integrated_as_it_is_is_named_as_the_cause(tmp_path, run):
     assert len(said) == 1 and said[0].endswith(
         "part.obj: an open surface integrated as it is (--allow-open), its signed volumes not a "
         "solid's")
+
+
+@pytest.mark.parametrize("bound, said", [(1e-12, 1), (0.03, 0)])
+def test_the_invalidity_warning_follows_mujocos_boundinertia(tmp_path, bound, said):
+    """MJCF boundinertia raises each computed principal moment to at least its value. The
+    inward-bosses wrist at MuJoCo's 1000 kg/m³ (6 kg) computes 0.0162, 0.0162, 0.05 kg·m²
+    (triangle broken); raised to 0.03, 0.03, 0.05 it is valid, and the warning goes."""
+    (tmp_path / "wrist.obj").write_text(_obj([_CUBE, *_BOSSES], inward=True))
+    (tmp_path / "r.xml").write_text(
+        f'<mujoco><compiler boundinertia="{bound}"/><asset><mesh name="w" file="wrist.obj"/>'
+        '</asset><worldbody><body name="wrist"><geom type="mesh" mesh="w"/></body></worldbody>'
+        '</mujoco>')
+    r, = analyze_model(tmp_path / "r.xml").links
+    assert r.computed_validity().ok is (said == 0)
+    assert sum(w.startswith("computed inertial not valid") for w in r.warnings) == said

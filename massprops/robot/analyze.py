@@ -332,6 +332,9 @@ def analyze_model(path: str | os.PathLike, *, source: str = "auto",
         from massprops.robot.inertials.rules import apply_rules  # only MJCF compilers ask for it
 
         reports, note = apply_rules(reports, model.rules)
+        # boundinertia may raise a computed tensor's moments: a warning of invalidity made
+        # before it goes where the tensor MuJoCo will use passes
+        reports = [_drop_stale_invalid(r) for r in reports]
         if note:
             model = replace(model, warnings=model.warnings + (note,))
     if check is not None:
@@ -385,6 +388,17 @@ class _OtherGeometry:
                  c.mass, c.center_of_mass, c.inertia)]
 
 
+_NOT_VALID = "computed inertial not valid, never written"
+
+
+def _drop_stale_invalid(r: LinkReport) -> LinkReport:
+    """``r`` without its invalidity warning when its computed inertial (after the rules) passes."""
+    v = r.computed_validity()
+    if v is None or not v.ok:
+        return r
+    return replace(r, warnings=tuple(w for w in r.warnings if not w.startswith(_NOT_VALID)))
+
+
 def _invalid_warning(validity: Validity, geometries: Sequence[Geometry], parts: Sequence
                      ) -> str:
     """One line for a link whose computed inertial fails a validity test: the test, and the
@@ -394,7 +408,7 @@ def _invalid_warning(validity: Validity, geometries: Sequence[Geometry], parts: 
     from massprops.mesh.health import LOOSE_CAVITY, OPEN_SURFACE  # the rare path only
 
     bad = validity.problems
-    head = (f"computed inertial not valid, never written: {bad[0]}"
+    head = (f"{_NOT_VALID}: {bad[0]}"
             + (f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""))
     causes = []
     for g, part in zip(geometries, parts):
