@@ -76,6 +76,11 @@ class DegenerateMeshError(InputError, ValueError):
     """The mesh encloses no volume (flat, empty) or its inertia is unphysical."""
 
 
+class NoVolumeError(DegenerateMeshError):
+    """The mesh encloses no volume at all: a sheet, a few slivers, no triangles. Alone it has no
+    mass properties; beside other geometry of a robot link it adds nothing (zero volume)."""
+
+
 class UnphysicalInertiaError(InputError, ValueError):
     """An inertia tensor that no body can have: not symmetric, not positive definite, or a
     principal moment larger than the sum of the other two (triangle inequality)."""

@@ -6,10 +6,12 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from massprops.inertia import parallel_axis, parallel_axis_to_com, rotate_inertia
+from massprops.robot.analyze import analyze_model
 from massprops.robot.doctor.bounds import bounds_of, primitive_points
 from massprops.robot.doctor.validity import judge
 from massprops.rotation import quat_to_matrix
@@ -116,3 +118,122 @@ def test_a_computed_inertial_with_negative_density_is_not_valid(tmp_path, run):
     table = run("model", tmp_path / "r.urdf").stdout
     assert ("wrist: computed inertial not valid, never written: inertia is not positive "
             "definite") in " ".join(table.split())
+
+
+# example-robot-data's romeo LWristRoll.dae, as found on the real file: every piece faces
+# inward; the main body (a solid "inside no other piece") is flipped, but each of the two small
+# bosses has a vertex inside it, so the nesting rule takes them for cavities of it, though most
+# of each lies outside. Here: the cube [-0.1, 0.1]³ and bosses [-0.05, 0.05]² x [0.08, 0.18] and
+# its mirror in z, all three written inward; a fifth of each boss lies in the cube.
+_CUBE = ([-0.1, -0.1, -0.1], [0.1, 0.1, 0.1])
+_BOSSES = (([-0.05, -0.05, 0.08], [0.05, 0.05, 0.18]), ([-0.05, -0.05, -0.18], [0.05, 0.05, -0.08]))
+_FACES = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1), (2, 3, 7), (2, 7, 6),
+          (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]  # outward for the corner order below
+
+
+def _obj(boxes, inward: bool) -> str:
+    out = []
+    for k, (lo, hi) in enumerate(boxes):
+        out += [f"v {x} {y} {z}" for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                for z in (lo[2], hi[2])]
+        out += [f"f {' '.join(str(8 * k + i + 1) for i in (f[::-1] if inward else f))}"
+                for f in _FACES]
+    return "\n".join(out) + "\n"
+
+
+def _signed_boxes(signed) -> tuple[float, np.ndarray, np.ndarray]:
+    """Closed form: volume, centroid and inertia about it (unit density) of boxes counted with
+    the signs given (+1 solid, -1 subtracted), by the parallel-axis rule."""
+    parts = []
+    for s, (lo, hi) in signed:
+        d = np.subtract(hi, lo)
+        v = float(np.prod(d))
+        parts.append((s * v, (np.add(lo, hi)) / 2, s * _box_inertia(v, *d)))
+    vol = sum(v for v, _c, _j in parts)
+    com = sum(v * c for v, c, _j in parts) / vol
+    j = sum(jj + parallel_axis(np.zeros((3, 3)), v, c - com) for v, c, jj in parts)
+    return vol, com, j
+
+
+def _wrist(tmp_path, inward: bool):
+    (tmp_path / "wrist.obj").write_text(_obj([_CUBE, *_BOSSES], inward))
+    (tmp_path / "r.urdf").write_text(
+        '<robot name="r"><link name="wrist"><inertial><mass value="2"/><inertia ixx="0.01" '
+        'ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial><collision><geometry>'
+        '<mesh filename="wrist.obj"/></geometry></collision></link></robot>')
+    return tmp_path / "r.urdf"
+
+
+def test_romeo_wrist_inward_bosses_taken_for_cavities_break_the_triangle(tmp_path, run):
+    row = json.loads(run("model", _wrist(tmp_path, inward=True), "--json").stdout)
+    # what the signed integral is: the cube less both whole bosses (closed form, mass 2 kept)
+    vol, com, j = _signed_boxes([(1, _CUBE), (-1, _BOSSES[0]), (-1, _BOSSES[1])])
+    moments = np.linalg.eigvalsh(j)
+    assert moments[0] > 0 and moments[2] > moments[0] + moments[1]  # romeo's pattern
+    assert np.allclose(row["computed"]["inertia"], 2 / vol * j, rtol=0, atol=1e-12)
+    assert np.allclose(row["computed"]["center_of_mass"], com, atol=1e-12)
+    assert row["computed"]["valid"] == {"positive_definite": True, "triangle": False,
+                                        "com_inside": True, "realizable": False}
+    said = [w for w in row["warnings"] if w.startswith("computed inertial not valid")]
+    assert len(said) == 1
+    assert ("principal moments" in said[0] and "break the triangle inequality" in said[0]
+            and "wrist.obj: components 2, 3 face inward and are partly outside every solid part, "
+            "so they count there with negative density" in said[0])
+    table = " ".join(run("model", _wrist(tmp_path, inward=True)).stdout.split())
+    assert table.count("computed inertial not valid") == 1
+    assert "wrist.obj: components 2, 3 face inward" in table
+
+
+def test_romeo_wrist_with_its_faces_reversed_in_the_file_is_valid(tmp_path, run):
+    """The fix the warning names: every piece outward, the bosses are solids (their share with
+    the cube counted twice, as the overlap warning says)."""
+    row = json.loads(run("model", _wrist(tmp_path, inward=False), "--json").stdout)
+    vol, _com, j = _signed_boxes([(1, _CUBE), (1, _BOSSES[0]), (1, _BOSSES[1])])
+    assert np.allclose(row["computed"]["inertia"], 2 / vol * j, rtol=0, atol=1e-12)
+    assert all(row["computed"]["valid"].values())
+    assert not any(w.startswith("computed inertial not valid") for w in row["warnings"])
+
+
+def test_an_open_mesh_integrated_as_it_is_is_named_as_the_cause(tmp_path, run):
+    """--allow-open: a closed cube [-0.1, 0.1]³ and two loose squares 0.1 wide at z = ±0.5 facing
+    the origin. Integrated about the box centre (the origin), each square closes off a pyramid of
+    negative volume with its apex there; the closed form of cube less both pyramids."""
+    out = [f"v {x} {y} {z}" for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)]
+    out += [f"f {' '.join(str(i + 1) for i in f)}" for f in _FACES]
+    for k, z in enumerate((0.5, -0.5)):
+        b = 9 + 4 * k
+        out += [f"v -0.05 -0.05 {z}", f"v 0.05 -0.05 {z}", f"v 0.05 0.05 {z}", f"v -0.05 0.05 {z}"]
+        quad = [(b, b + 1, b + 2), (b, b + 2, b + 3)]
+        out += [f"f {' '.join(map(str, t[::-1] if z > 0 else t))}" for t in quad]
+    (tmp_path / "part.obj").write_text("\n".join(out) + "\n")
+    (tmp_path / "r.urdf").write_text(
+        '<robot name="r"><link name="flap"><inertial><mass value="1"/><inertia ixx="0.01" '
+        'ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial><collision><geometry>'
+        '<mesh filename="part.obj"/></geometry></collision></link></robot>')
+    row = json.loads(run("model", tmp_path / "r.urdf", "--json", "--allow-open").stdout)
+    a, h, side = 0.1, 0.5, 0.2
+    vol = side**3 - 2 * a * a * h / 3
+    sxx = side**3 * side**2 / 12 - 2 * a**4 * h / 60  # ∫x² dV: cube less both pyramids
+    szz = side**3 * side**2 / 12 - 2 * a**2 * h**3 / 5
+    j = np.diag([sxx + szz, sxx + szz, 2 * sxx]) / vol  # m = 1 kg
+    assert np.allclose(row["computed"]["inertia"], j, rtol=0, atol=1e-12)
+    assert row["computed"]["valid"]["positive_definite"] is False
+    said = [w for w in row["warnings"] if w.startswith("computed inertial not valid")]
+    assert len(said) == 1 and said[0].endswith(
+        "part.obj: an open surface integrated as it is (--allow-open), its signed volumes not a "
+        "solid's")
+
+
+@pytest.mark.parametrize("bound, said", [(1e-12, 1), (0.03, 0)])
+def test_the_invalidity_warning_follows_mujocos_boundinertia(tmp_path, bound, said):
+    """MJCF boundinertia raises each computed principal moment to at least its value. The
+    inward-bosses wrist at MuJoCo's 1000 kg/m³ (6 kg) computes 0.0162, 0.0162, 0.05 kg·m²
+    (triangle broken); raised to 0.03, 0.03, 0.05 it is valid, and the warning goes."""
+    (tmp_path / "wrist.obj").write_text(_obj([_CUBE, *_BOSSES], inward=True))
+    (tmp_path / "r.xml").write_text(
+        f'<mujoco><compiler boundinertia="{bound}"/><asset><mesh name="w" file="wrist.obj"/>'
+        '</asset><worldbody><body name="wrist"><geom type="mesh" mesh="w"/></body></worldbody>'
+        '</mujoco>')
+    r, = analyze_model(tmp_path / "r.xml").links
+    assert r.computed_validity().ok is (said == 0)
+    assert sum(w.startswith("computed inertial not valid") for w in r.warnings) == said

@@ -132,3 +132,45 @@ def test_xacro_errors_say_the_lines_are_the_expanded_files(run, tmp_path):
     q.write_text(XACRO.replace("${mass}", "${nomass}"))
     res = run("model", "--json", q)
     assert res.exit_code == 1 and "xacro failed" in res.stderr and "nomass" in res.stderr
+
+
+# robosuite's sawyer robot.xml, body right_l0: seven visual meshes, one of them (l0_4.obj) five
+# loose flat quads. --fill-holes caps each quad with its own mirror: a closed sheet of zero
+# volume. Beside the body's other geometry it adds nothing (MuJoCo gives it ~1e-7 kg of the
+# body's 5.46); alone it is still refused.
+def _sheets_obj() -> str:
+    out = []
+    for k in range(5):
+        x = 0.3 + 0.01 * k
+        out += [f"v {x} 0 0", f"v {x} 0.004 0", f"v {x} 0 0.004", f"v {x} 0.004 0.004"]
+        out += [f"f {4 * k + 1} {4 * k + 2} {4 * k + 3}", f"f {4 * k + 2} {4 * k + 4} {4 * k + 3}"]
+    return "\n".join(out) + "\n"
+
+
+def _mjcf_with_sheet(tmp_path, box: bool):
+    (tmp_path / "sheets.obj").write_text(_sheets_obj())
+    geom = '<geom type="box" size="0.05 0.1 0.15" pos="0 0 0.2"/>' if box else ""
+    p = tmp_path / "r.xml"
+    p.write_text('<mujoco><asset><mesh name="s" file="sheets.obj"/></asset><worldbody>'
+                 f'<body name="l0">{geom}<geom type="mesh" mesh="s"/></body>'
+                 '</worldbody></mujoco>')
+    return p
+
+
+def test_a_sheet_beside_other_geometry_adds_nothing(tmp_path):
+    from massprops.repair import RepairOptions
+
+    repairs = RepairOptions(fill_holes=True, max_hole=0.5)
+    r, = analyze_model(_mjcf_with_sheet(tmp_path, box=True), repairs=repairs).links
+    assert r.status == "computed"
+    # the box alone, MuJoCo's default density 1000 kg/m³: 0.1 x 0.2 x 0.3 m
+    m = 1000 * 0.1 * 0.2 * 0.3
+    assert r.computed.mass == pytest.approx(m, rel=1e-12)
+    assert r.computed.center_of_mass == pytest.approx([0, 0, 0.2], abs=1e-12)
+    assert r.computed.principal_moments == pytest.approx(
+        sorted(m / 12 * x for x in (0.2**2 + 0.3**2, 0.1**2 + 0.3**2, 0.1**2 + 0.2**2)),
+        rel=1e-12)
+    said = [w for w in r.warnings if "encloses no volume" in w]
+    assert len(said) == 1 and said[0].startswith("sheets.obj: ")
+    alone, = analyze_model(_mjcf_with_sheet(tmp_path, box=False), repairs=repairs).links
+    assert alone.status == "skipped" and alone.error and "encloses no volume" in alone.reason

@@ -100,3 +100,16 @@ def test_sdf_include_not_found_names_the_options(tmp_path, monkeypatch):
     with pytest.raises(RobotModelError, match=r"world\.sdf:2: <include>: ") as err:
         analyze_model(world)
     assert "package_path" in err.value.settings
+
+
+def test_a_missing_mesh_in_a_format_we_cannot_read_is_said_missing(tmp_path):
+    """example-robot-data's romeo_laas_small.urdf names file:///usr/Romeo/.../Torso.mesh (Ogre
+    meshes on its author's machine): that the file is not there is the problem to say."""
+    gone = tmp_path / "not-here" / "Torso.mesh"
+    (tmp_path / "r.urdf").write_text(
+        '<robot name="r"><link name="torso"><inertial><mass value="1"/><inertia ixx="1" ixy="0" '
+        f'ixz="0" iyy="1" iyz="0" izz="1"/></inertial><visual><geometry><mesh filename="file://'
+        f'{gone}"/></geometry></visual></link></robot>')
+    r, = analyze_model(tmp_path / "r.urdf").links
+    assert r.status == "skipped" and r.error
+    assert f"{gone}: no such file" in r.reason and "extension" not in r.reason

@@ -171,3 +171,21 @@ def test_simulate_takes_package_path_for_xacro_find(tmp_path, run):
     result = run("simulate", path, "--duration", "0", "--json", "--package-path",
                  tmp_path / "ros")
     assert result.exit_code == 0, result.stderr
+
+
+def test_an_include_by_package_uri_says_to_write_find(tmp_path, run):
+    """example-robot-data's hector_description/robots/quadrotor_base.xacro includes
+    "package://example-robot-data/robots/hector_description/urdf/quadrotor_base.urdf.xacro":
+    xacro takes that for a relative path and finds nothing."""
+    pytest.importorskip("xacro")
+    path = tmp_path / "robots" / "q.xacro"
+    path.parent.mkdir()
+    path.write_text('<robot name="q" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+                    '<xacro:include filename="package://mypkg/urdf/base.urdf.xacro"/></robot>')
+    result = run("model", path)
+    assert result.exit_code == 1
+    line = _one_error(result)
+    assert line.startswith(f"{path}: xacro failed: No such file or directory")
+    assert line.endswith("; xacro:include takes a path, not a URI: write "
+                         "$(find mypkg)/urdf/base.urdf.xacro for "
+                         "package://mypkg/urdf/base.urdf.xacro")

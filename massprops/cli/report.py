@@ -272,10 +272,6 @@ def print_model(report, rtol: float | None = None) -> None:
             notes.extend(f"{r.name}: stated {p}" for p in cmp.problems)
             if r.diagnosis is not None:
                 notes.append(f"{r.name}: diagnosis: {cli_text(r.diagnosis.detail)}")
-        bad = r.computed_validity().problems
-        if bad:
-            notes.append(f"{r.name}: computed inertial not valid, never written: {bad[0]}"
-                         + (f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""))
         notes.extend(f"{r.name}: {cli_text(w)}" for w in r.warnings)
         notes.extend(f"{r.name}: {mesh}: repaired ({', '.join(rec)})"
                      for mesh, rec in (r.repairs or {}).items())

@@ -17,12 +17,19 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from massprops.errors import DegenerateMeshError, MeshFormatError, MeshTopologyError, setting_ref
+from massprops.errors import MeshFormatError, MeshTopologyError, NoVolumeError, setting_ref
 from massprops.mesh.geometry import area_vector_sums, exactly_flat, signed_volumes6
 from massprops.mesh.topology import Edges, connected_components, consistent_flips, edges, is_soup
 from massprops.mesh.value import Mesh
 from massprops.mesh.weld import near_groups, weld
 from massprops.tolerances import EPS, EPS32, MAX_HOLE_AREA_FRACTION, NEAR_WELD_ULPS
+
+LOOSE_CAVITY = "is partly outside every solid part"
+"""The warning's words for an inward-facing piece not wholly inside a solid: the part outside
+is integrated with negative density (`massprops.robot.analyze` names it when the link's
+computed inertial then fails a validity test)."""
+OPEN_SURFACE = "an open surface encloses no defined volume"
+"""The warning's words for a mesh integrated open (``allow_open``)."""
 
 if TYPE_CHECKING:  # imported where a repair needs it: most meshes never do
     from massprops.mesh.nesting import Plan
@@ -213,7 +220,7 @@ def _open_warnings(mesh: Mesh, a: _Analysis, volume: float) -> list[str]:
            f"{_boundary_length(mesh, a):.6g} m); open area |Σ face area vectors| = "
            f"{np.linalg.norm(hole):.3g} m², {_percent(np.linalg.norm(hole), area)} of the surface "
            f"area (0 for a closed surface)",
-           f"an open surface encloses no defined volume: the result is the volume closed off by "
+           f"{OPEN_SURFACE}: the result is the volume closed off by "
            f"cones from the integration origin to each hole's rim; moving that origin across the "
            f"bounding box changes it by up to {spread:.3g} m³ ({_percent(spread, abs(volume))} of "
            f"the {volume:.6g} m³ computed about the box centre)"]
@@ -304,8 +311,8 @@ def _plan_warnings(plan: Plan, volumes: np.ndarray, quiet: np.ndarray, unioned: 
     out += _first_five([f"components {a + 1} and {b + 1} overlap (their surfaces cross: a point "
                         f"lies inside both): the volume they share is counted twice"
                         for a, b in ([] if unioned else plan.crossings)])
-    out += _first_five([f"component {c + 1} (a cavity: faces inward) is partly outside every "
-                        f"solid part: that part is subtracted from nothing" for c in plan.loose])
+    out += _first_five([f"component {c + 1} (a cavity: faces inward) {LOOSE_CAVITY}: that part "
+                        f"is subtracted from nothing" for c in plan.loose])
     return out
 
 
@@ -487,7 +494,7 @@ def prepare_mesh(mesh: Mesh, *, allow_open: bool = False, unioned: bool = False
     if a.edges.count("open"):
         mesh, a, cracks, crack_notes = _close_cracks(mesh, a)
     if np.count_nonzero(a.used) < 4:
-        raise DegenerateMeshError(f"{mesh.name}: the faces span only {np.count_nonzero(a.used)} "
+        raise NoVolumeError(f"{mesh.name}: the faces span only {np.count_nonzero(a.used)} "
                                   f"distinct vertex positions (zero-area faces aside); a solid "
                                   f"needs at least 4")
     volumes = _component_volumes(a, a.det6)

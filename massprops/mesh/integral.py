@@ -31,7 +31,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from massprops.errors import DegenerateMeshError, MeshFormatError, UsageError, setting_ref
+from massprops.errors import (
+    DegenerateMeshError,
+    MeshFormatError,
+    NoVolumeError,
+    UsageError,
+    setting_ref,
+)
 from massprops.inertia import parallel_axis_to_com, principal_axes
 from massprops.mesh.facesums import FaceSums, U, det_error, face_sums, gamma, reach_of, sum_depth
 from massprops.mesh.value import Mesh
@@ -261,8 +267,8 @@ def check_coordinate_scale(mesh: Mesh) -> None:
 def _check_faces(mesh: Mesh) -> None:
     v, f = mesh.vertices, mesh.faces
     if f.shape[0] == 0 or v.shape[0] == 0:
-        raise DegenerateMeshError(f"{mesh.name}: encloses no volume (flat?): expected a closed "
-                                  "surface, got no triangles; check that the file holds a solid")
+        raise NoVolumeError(f"{mesh.name}: encloses no volume (flat?): expected a closed "
+                            "surface, got no triangles; check that the file holds a solid")
     if f.min() < 0 or f.max() >= v.shape[0]:
         raise MeshFormatError(f"{mesh.name}: face indices must lie in 0..{v.shape[0] - 1}, got "
                               f"{f.min()}..{f.max()}; the faces refer to missing vertices")
@@ -340,7 +346,7 @@ def _tensor(second: np.ndarray, products: np.ndarray) -> np.ndarray:
 
 def _check_volume(volume: float, volume_err: float, name: str) -> None:
     if volume == 0 or abs(volume) < MIN_VOLUME_TO_ERROR * volume_err:
-        raise DegenerateMeshError(
+        raise NoVolumeError(
             f"{name}: encloses no volume (flat?): expected a closed solid, got a volume of "
             f"{volume:.3g} m³, within {MIN_VOLUME_TO_ERROR:g}x its rounding error "
             f"{volume_err:.3g} m³; check that the file holds a solid, not a sheet")

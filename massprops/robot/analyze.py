@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -19,6 +20,7 @@ from massprops.errors import (
     CheckFailedError,
     MassPropsError,
     MeshTopologyError,
+    NoVolumeError,
     RobotModelError,
     UsageError,
     error_message,
@@ -31,7 +33,7 @@ from massprops.robot.formats.xacro_run import EXPANDED, expand_xacro, has_xacro,
 from massprops.robot.formats.xmltree import parse_xml, parse_xml_bytes
 from massprops.robot.inertials.combine import LinkMass, MeshCache, combine, integrate_geometry
 from massprops.robot.inertials.compare import Comparison, compare, relative_difference
-from massprops.robot.model import Link, RobotModel
+from massprops.robot.model import Geometry, Link, RobotModel
 from massprops.tolerances import WRITE_KEEP_RTOL
 
 __all__ = ["LinkReport", "ModelReport", "analyze_model", "load_model", "FORMATS_BY_ROOT"]
@@ -330,6 +332,9 @@ def analyze_model(path: str | os.PathLike, *, source: str = "auto",
         from massprops.robot.inertials.rules import apply_rules  # only MJCF compilers ask for it
 
         reports, note = apply_rules(reports, model.rules)
+        # boundinertia may raise a computed tensor's moments: a warning of invalidity made
+        # before it goes where the tensor MuJoCo will use passes
+        reports = [_drop_stale_invalid(r) for r in reports]
         if note:
             model = replace(model, warnings=model.warnings + (note,))
     if check is not None:
@@ -383,6 +388,50 @@ class _OtherGeometry:
                  c.mass, c.center_of_mass, c.inertia)]
 
 
+_NOT_VALID = "computed inertial not valid, never written"
+
+
+def _drop_stale_invalid(r: LinkReport) -> LinkReport:
+    """``r`` without its invalidity warning when its computed inertial (after the rules) passes."""
+    v = r.computed_validity()
+    if v is None or not v.ok:
+        return r
+    return replace(r, warnings=tuple(w for w in r.warnings if not w.startswith(_NOT_VALID)))
+
+
+def _invalid_warning(validity: Validity, geometries: Sequence[Geometry], parts: Sequence
+                     ) -> str:
+    """One line for a link whose computed inertial fails a validity test: the test, and the
+    mesh and defect that make an integral of the geometry do that (a positive density, however
+    overlapped, never fails them): inward-facing pieces partly outside every solid (counted there
+    with negative density), or an open surface integrated as it is."""
+    from massprops.mesh.health import LOOSE_CAVITY, OPEN_SURFACE  # the rare path only
+
+    bad = validity.problems
+    head = (f"{_NOT_VALID}: {bad[0]}"
+            + (f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""))
+    causes = []
+    for g, part in zip(geometries, parts):
+        loose = [m.group(1) for w in part.warnings
+                 if (m := re.match(rf"component (\d+) \(a cavity: faces inward\) {LOOSE_CAVITY}",
+                                   w))]
+        if loose:
+            one = len(loose) == 1
+            which = (f"component {loose[0]} faces inward and is" if one else
+                     f"components {', '.join(loose)} face inward and are")
+            it = ("it counts", "it is a solid, its") if one else ("they count", "they are "
+                                                                   "solids, their")
+            causes.append(f"{g.uri}: {which} {LOOSE_CAVITY.removeprefix('is ')}, so {it[0]} "
+                          f"there with negative density (if {it[1]} faces are reversed in the "
+                          "file: fix them there)")
+        elif any(w.startswith(OPEN_SURFACE) for w in part.warnings):
+            causes.append(f"{g.uri}: an open surface integrated as it is "
+                          f"({setting_ref('allow_open')}), its signed volumes not a solid's")
+    if not causes:
+        return f"{head}; no defect of the geometry found to explain it"
+    return f"{head}: {'; '.join(causes)}"
+
+
 def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | None,
           source: str) -> LinkReport:
     warnings = list(link.warnings)
@@ -403,10 +452,17 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
             return skipped(g.problem, True)
     warnings.extend(g.warning for g in link.geometries if g.warning)
     parts = []
+    used = []  # the geometries in parts: all but sheets beside other geometry
+    sheets: list[tuple[Geometry, NoVolumeError]] = []
     repaired: dict = {}
     for g in link.geometries:
         try:
             part = integrate_geometry(g, meshes)
+        except NoVolumeError as exc:
+            if len(link.geometries) > 1 and g.mass is None:
+                sheets.append((g, exc))  # adds nothing beside the others (MuJoCo: ~0 too)
+                continue
+            return skipped(f"{g.uri or g.kind} (line {g.node.line}): {error_message(exc)}", True)
         except MassPropsError as exc:
             hint = ""
             if isinstance(exc, MeshTopologyError) and link.source == "collision":
@@ -417,6 +473,12 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         if part.repairs:
             repaired[g.uri or g.kind] = part.repairs
         parts.append(part)
+        used.append(g)
+    if sheets and not parts:
+        g, flat = sheets[0]
+        return skipped(f"{g.uri or g.kind} (line {g.node.line}): {error_message(flat)}", True)
+    warnings.extend(f"{g.uri}: encloses no volume (a sheet or slivers): counted as zero volume "
+                    "beside the link's other geometry" for g, _exc in sheets)
     stated = link.stated
 
     def split(parts) -> tuple[list[float], float | None] | None:
@@ -424,12 +486,12 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         if density is not None:
             return [density * p.volume for p in parts], None
         weights = [g.mass if g.mass is not None else (g.density or 1.0) * p.volume
-                   for g, p in zip(link.geometries, parts)]
+                   for g, p in zip(used, parts)]
         if stated is not None and stated.mass > 0:
             return [stated.mass * w / sum(weights) for w in weights], stated.mass
         if link.auto_mass is not None:  # SDF auto: the densities' shares of the given mass
             return [link.auto_mass * w / sum(weights) for w in weights], link.auto_mass
-        if model.format == "mjcf" or all(g.density is not None for g in link.geometries):
+        if model.format == "mjcf" or all(g.density is not None for g in used):
             return weights, None
         return None
 
@@ -447,6 +509,9 @@ def _link(link: Link, model: RobotModel, meshes: MeshCache, density: float | Non
         comparison = compare(stated, computed)
     if not np.isfinite(computed.inertia).all():
         return skipped("the computed inertia is not finite", True)
+    validity = judge(computed.mass, computed.center_of_mass, computed.inertia, computed.bounds)
+    if not validity.ok:
+        warnings.append(_invalid_warning(validity, used, parts))
     return LinkReport(link, "computed", None, False, computed, comparison, tuple(warnings),
                       repaired or None,
-                      shapes=lambda: shape_bases(link.geometries, parts, meshes, split))
+                      shapes=lambda: shape_bases(used, parts, meshes, split))

@@ -1,9 +1,11 @@
 """Why a stated inertial differs from the computed one: the search over the named causes.
 
 A model of the stated inertial is: a *base* (the computed inertial, or one of the `shapes`
-alternatives), then a unit reading (`writing.UNITS`: none, length, mass, or both), then at most
-one change of the tensor: none, ``about_point``, ``rotated`` / ``axes_permuted``
-(`frames`), ``product_sign`` or ``decimal_slip`` (`writing`), each solved from the numbers.
+alternatives), then a unit reading (`writing.UNITS`: none, length, mass, or both), then one
+change of the tensor: none, ``about_point``, ``rotated`` / ``axes_permuted``
+(`frames`), ``product_sign`` or ``decimal_slip`` (`writing`), each solved from the numbers, or
+two composed (`_composed`: two decimal slips; a turn about the link origin or the stated COM),
+each still leaving numbers to check it.
 Its residual is the relative difference left, measured as ``--check`` measures
 (`compare.relative_difference`: mass, COM / size, inertia in the 2-norm). A cause is named only
 when its model leaves at most `tolerances.DIAGNOSIS_RTOL`; among those the fewest causes win,
@@ -19,6 +21,7 @@ from typing import cast
 
 import numpy as np
 
+from massprops.inertia import parallel_axis
 from massprops.robot.doctor.frames import about_point, rotation
 from massprops.robot.doctor.writing import UNITS, decimal_slip, is_placeholder, product_sign
 from massprops.tolerances import DIAGNOSIS_RTOL
@@ -96,7 +99,9 @@ def _search(stated, bases: Sequence[Base], size: float, difference) -> tuple:
             models += [((c,), jj, coms) for c, jj, coms in rotation(target, j, com,
                                                                       DIAGNOSIS_RTOL)]
             models += [((c,), jj, [com]) for c, jj in product_sign(j)]
-            models += [((c,), jj, [com]) for c, jj in decimal_slip(target, j)]
+            slips = decimal_slip(target, j)
+            models += [((c,), jj, [com]) for c, jj in slips]
+            models += _composed(target, j, m, com, s_com / cm, slips)
             for causes, jj, coms in models:
                 every = (*base_causes, *unit_causes, *causes)
                 if not every:
@@ -108,6 +113,37 @@ def _search(stated, bases: Sequence[Base], size: float, difference) -> tuple:
                     if key < best[0]:
                         best = (key, r, every)
     return best
+
+
+def _composed(target: np.ndarray, j: np.ndarray, m: float, com: np.ndarray,
+              stated_com: np.ndarray, slips: list) -> list:
+    """Two changes at once, each still solved from the numbers with data left to check it:
+
+    - two decimal slips (each element's power of ten read from its own ratio; the other four
+      elements must match);
+    - a turn of the tensor about a *fixed* point: about the link origin, or about the stated COM
+      where that differs from the computed one (the inertial frame's origin): R (J + m S(p − c))
+      Rᵀ, R solved as ``rotated`` is (3 parameters, the 3 principal moments must match). The
+      point is not solved for: a free point and a free turn are 6 parameters for 6 numbers and
+      would fit nearly any tensor, naming causes the numbers cannot bear out."""
+    out: list = []
+    for a in range(len(slips)):
+        for b in range(a + 1, len(slips)):
+            (ca, ja), (cb, jb) = slips[a], slips[b]
+            out.append(((ca, cb), ja + jb - j, [com]))
+    points = [np.zeros(3)]
+    if np.linalg.norm(stated_com - com) > 1e-9 * max(float(np.linalg.norm(com)), 1e-300):
+        points.append(np.asarray(stated_com, dtype=np.float64))
+    for p in points:
+        d = p - com
+        if not np.linalg.norm(d) > 0:
+            continue
+        where = ("the link origin" if not np.any(p) else "the inertial frame's origin")
+        shift = ("about_point", {"point": p.tolist()},
+                 f"inertia about {where} ({np.linalg.norm(d):.3g} m from the COM)")
+        for c, jj, coms in rotation(target, parallel_axis(j, m, d), com, DIAGNOSIS_RTOL):
+            out.append(((shift, c), jj, [*coms, p]))
+    return out
 
 
 def _say(causes) -> str:

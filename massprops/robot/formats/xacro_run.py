@@ -74,6 +74,7 @@ def expand_xacro(path: Path, args: Mapping[str, str] | None = None,
 _ANSI = re.compile(r"\x1b\[[0-9;]*m")  # xacro colours its warnings
 _NO_ARG = re.compile(r"Undefined substitution argument (\S+)")  # $(arg NAME) without a value
 _NO_NAME = re.compile(r"name '(\w+)' is not defined")  # ${NAME}: Python's NameError, said
+_PACKAGE_INCLUDE = re.compile(r"No such file or directory: \S*?package://([^/\s]+)/(\S+?)'?(?:\s|$)")
 
 
 def _ours(exc: BaseException) -> MassPropsError | None:
@@ -89,6 +90,10 @@ def _what_to_do(text: str, path: Path) -> str:
     arg = _NO_ARG.search(text)
     if arg:
         return f"give its value with {setting_ref('xacro_arg')} {arg[1]}:=VALUE"
+    uri = _PACKAGE_INCLUDE.search(text)
+    if uri:  # xacro joins the URI to the folder as a relative path
+        return (f"xacro:include takes a path, not a URI: write $(find {uri[1]})/{uri[2]} for "
+                f"package://{uri[1]}/{uri[2]}")
     name = _NO_NAME.search(text)
     if name:
         return (f"the property {name[1]!r} is not defined in {path.name} nor in the files it "

@@ -18,6 +18,7 @@ from typing import cast
 import numpy as np
 
 from massprops.errors import DegenerateMeshError, MeshTopologyError
+from massprops.files import check_input_file
 from massprops.inertia import parallel_axis, principal_axes, rotate_inertia
 from massprops.inspection.file import inspect_mesh
 from massprops.io import read_mesh
@@ -131,6 +132,9 @@ class MeshCache:
             mesh = Mesh(np.ascontiguousarray(geom.vertices, dtype=np.float64),
                         np.ascontiguousarray(geom.faces, dtype=np.int64), name=geom.uri)
         else:  # a mesh file: resolved, since an unresolved one is skipped (Geometry.problem)
+            # a missing file first: "no such file" says more than its extension would (romeo's
+            # file:///usr/Romeo/.../Torso.mesh, a path on its author's machine)
+            check_input_file(cast(Path, geom.path))
             mesh = read_mesh(Path(cast(Path, geom.path)), name=str(geom.path))
         scale = np.asarray(geom.scale, dtype=np.float64)
         if not np.all(scale != 0):
