@@ -322,10 +322,12 @@ TIME_KEYS = ("duration", "integrator", "rtol", "step")
 """The keys of a scene's ``time:`` (one body and systems alike)."""
 
 
-def _time(field: Field, known_integrators: Sequence[str]) -> TimeSettings:
+def _time(field: Field, known_integrators: Sequence[str], static: bool = False) -> TimeSettings:
+    """``time:``; ``static``: a duration of 0 is allowed (a system's start-pose reactions)."""
     fields = read_mapping(field, TIME_KEYS,
                           {"duration": "duration: 10.0 (seconds)"})
-    values: dict[str, Any] = {"duration": read_positive(fields["duration"])}
+    read = read_non_negative if static else read_positive
+    values: dict[str, Any] = {"duration": read(fields["duration"])}
     if "integrator" in fields:
         values["integrator"] = read_choice(fields["integrator"], known_integrators, "integrator")
     if "rtol" in fields:

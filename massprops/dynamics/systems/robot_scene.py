@@ -26,6 +26,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 from massprops.dynamics.model import OutputSettings, TimeSettings
 from massprops.dynamics.scene import _output, _with_place, read_top, scene_text
@@ -145,10 +146,27 @@ def parse_model_scene(text: str, *, source: str, base_dir: Path) -> SystemScene:
     index = {b.name: i for i, b in enumerate(desc.bodies)}
     places: dict[str, str] = {}
     gravity, forces, springs, drags = _forces(fields.get("forces"), index)
+    notes = []
+    if not _names_gravity(fields.get("forces")):  # the description's own, as simulate ROBOT
+        gravity = np.array(STANDARD_GRAVITY) if desc.gravity is None else desc.gravity
+        notes.append(f"{source}: forces: names no gravity: the description's applies, "
+                     f"g = {[float(x) for x in gravity]} m/s² (a gravity entry with g: [0, 0, "
+                     "0] turns it off)")
     initial = _initial(fields.get("initial"), index, {j.name for j in desc.joints}, places)
     time = system_time(fields["time"])
     output = _output(fields.get("output"), base_dir)
-    return _scene(desc, gravity, forces, springs, initial, time, output, source, places, drags)
+    scene = _scene(desc, gravity, forces, springs, initial, time, output, source, places, drags)
+    return dataclasses.replace(scene, notes=(*scene.notes, *notes)) if notes else scene
+
+
+def _names_gravity(field: Field | None) -> bool:
+    """Whether the scene's ``forces:`` list has a gravity entry (read and checked by
+    `systems.scene._forces`; here only looked at)."""
+    if field is None or not isinstance(field.node, yaml.SequenceNode):
+        return False
+    return any(isinstance(item, yaml.MappingNode) and any(
+        k.value == "type" and getattr(v, "value", None) == "gravity" for k, v in item.value)
+        for item in field.node.value)
 
 
 def _xacro_args(field: Field | None) -> dict[str, str]:

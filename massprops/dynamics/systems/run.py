@@ -52,6 +52,11 @@ from massprops.errors import (
 from massprops.parallel import beside
 from massprops.rotation import quat_to_matrix
 
+HOLDING_SAID = ("each joint's holding is what its motor adds to the joint's own spring and "
+                "drive to keep the final pose at rest (N·m or N per rate coordinate): a "
+                "description's joint stiffness carries its share itself")
+"""What ``diagnostics.holding`` says where the joints report holding forces."""
+
 
 @dataclass(frozen=True, eq=False)
 class SystemResult:
@@ -92,12 +97,14 @@ class SystemResult:
         return {"t": float(s.t[n]), "bodies": bodies, "joints": joints}
 
     def as_dict(self) -> dict:
+        diagnostics = self.diagnostics if self.holding is None else \
+            {**self.diagnostics, "holding": HOLDING_SAID}
         return {"integrator": self.integrator,
                 "reason": f"system: {self.reason}; projected onto the joints",
                 "steps": self.steps, "evaluations": self.evaluations,
                 "rejected_steps": self.rejected, "wall_time_s": self.wall_time_s,
                 "interrupted": self.interrupted, "final": self.row(-1),
-                "diagnostics": self.diagnostics}
+                "diagnostics": diagnostics}
 
 
 def _name(scene: SystemScene, i: int) -> str:

@@ -124,12 +124,14 @@ def parse_system(text: str, *, source: str, base_dir: Path) -> SystemScene:
 def system_time(field: Field) -> TimeSettings:
     """A system scene's ``time:`` (the one-body keys), its integrator one a system runs with:
     a one-body method named there is this file's mistake, said at its line (exit 1), where
-    --integrator naming one is the command line's (exit 2, `run.simulate_system`)."""
+    --integrator naming one is the command line's (exit 2, `run.simulate_system`). A duration
+    of 0 asks for the start pose's reactions (and a description's holding forces), as
+    ``--duration 0`` does."""
     # deferred: the registry is read only once the scene's other keys are known to be good
     from massprops.dynamics.integrators import integrator_names
     from massprops.dynamics.systems.methods import SYSTEM_INTEGRATORS
 
-    time = _time(field, integrator_names())
+    time = _time(field, integrator_names(), static=True)
     if time.integrator not in SYSTEM_INTEGRATORS:
         named = read_mapping(field, TIME_KEYS)["integrator"]
         raise named.error(f"{time.integrator} steps one body's state only; a system runs with "
