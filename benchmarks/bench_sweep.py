@@ -11,7 +11,9 @@ For each scene (a one-body sample and a system sample), N samples varying one bo
 - ``run_sweep`` in this process (``jobs=1``): wall time over the sum of runs (target <= 1.2);
 - ``run_sweep`` on a local pool of 2 workers: the speed-up over ``jobs=1`` (target >= 1.8 on
   2 cores), including the pool's start;
-- the same on a local Dask cluster of 2 one-thread worker processes (``--no-dask`` skips it).
+- the same on a local Dask cluster of 2 one-thread worker processes, warm (its second sweep;
+  the first, which pays the workers' imports and kernel loads, is printed too; ``--no-dask``
+  skips it).
 
 Every variant's rows are checked equal (the draws depend on the seed and the index alone).
 
@@ -68,16 +70,20 @@ def main() -> None:
         here, t_here = _rows(prepared)
         pooled, t_pool = _rows(prepared, jobs=2)
         assert pooled == here, "the pool's rows differ from one process's"
-        t_dask = float("nan")
+        t_dask = t_cold = float("nan")
         if not args.no_dask:
             import distributed
 
             with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                           dashboard_address=":0") as cluster, \
                     distributed.Client(cluster) as client:
-                client.run(lambda: __import__("massprops.sweep"))  # workers' imports: start-up
+                # the first sweep on fresh workers pays their imports and kernel loads; a
+                # cluster in use is warm: both are printed
+                clustered, t_cold = _rows(prepared, executor=client.get_executor(), workers=2)
+                assert clustered == here, "the cluster's rows differ from one process's"
                 clustered, t_dask = _rows(prepared, executor=client.get_executor(), workers=2)
             assert clustered == here, "the cluster's rows differ from one process's"
+            print(f"  dask: first sweep on fresh workers {t_cold:.2f} s, warm {t_dask:.2f} s")
         print(f"{path:40s} {loop:8.2f} {runs:8.2f} {t_here:8.2f} {t_here / runs:6.2f} "
               f"{t_pool:8.2f} {t_here / t_pool:5.2f} {t_dask:8.2f} {t_here / t_dask:5.2f}")
     print("columns: s of wall; /runs = sweep (jobs 1) over the sum of the runs' own wall times "
