@@ -19,7 +19,7 @@ LAYERS = (
     ("massprops.io", "massprops.repair"),
     ("massprops.inspection", "massprops.cad"),
     ("massprops.robot", "massprops.batch"),
-    ("massprops.dynamics", "massprops.sweep"),
+    ("massprops.dynamics", "massprops.sweep", "massprops.torques"),
     ("massprops.cli", "massprops.__main__", "massprops.api", "massprops"),
 )
 """Lowest first. ``massprops`` itself (the front door) and the CLI sit on top."""

@@ -359,3 +359,23 @@ def print_sweep(name: str, prepared, result: dict) -> None:
         if lin["sd"] is not None:
             sd = ", ".join(f"{x:.6g}" for x in np.ravel(np.asarray(lin["sd"], dtype=float)))
             _console.print(f"{output}: the delta method's sd {sd}", soft_wrap=True)
+
+
+def print_torques(robot: str, motion: str, result) -> None:
+    """`massprops torques`: one row per motor (peak and when, RMS, peak power, energy, limit)."""
+    s = result.summary
+    t = Table(title=Text(f"{robot} along {motion}: {s['samples']} samples", style="bold"),
+              title_justify="left", box=None, padding=(0, 2), header_style="bold")
+    for col in ("joint", "peak", "at t [s]", "RMS", "peak power [W]", "energy [J]", "limit",
+                "margin"):
+        t.add_column(Text(col), justify="left" if col == "joint" else "right", no_wrap=True)
+    for name, m in s["summary"].items():
+        limit, margin = m["limit"][0], m["margin"][0]
+        _row(t, name, f"{m['peak'][0]:.6g}", f"{m['peak_t'][0]:.6g}", f"{m['rms'][0]:.6g}",
+             f"{m['peak_power'][0]:.6g}", f"{m['energy'][0]:.6g}",
+             "" if limit is None else f"{limit:.6g}",
+             "" if margin is None else f"{margin:+.1%}")
+    _print_table(t)
+    bar = max((r["bar"] for r in result.rows), default=0.0)
+    _console.print(f"the motion's sampling: torques within ± {bar:.2g} (N·m or N)"
+                   + ("" if s["check"] == "not checked" else f"; check: {s['check']}"))

@@ -225,7 +225,7 @@ def _coupling(scene: SystemScene, c, joints: list[TreeJoint], of_scene: dict) ->
     return Coupling(c.name, tuple(terms), float(c.constant), scale)
 
 
-def _tree_order(j: TreeJoint, value: np.ndarray) -> np.ndarray:
+def tree_order(j: TreeJoint, value: np.ndarray) -> np.ndarray:
     """A one- or two-axis joint's scene coordinates (or rates) as the tree keeps them: a joint
     the tree runs from its second body to its first turns or shifts the other way, and a
     universal joint's axes come in the other order (`build_tree`)."""
@@ -299,14 +299,14 @@ def initial_coordinates(scene: SystemScene, tree: Tree, notes: list[str] | None 
                 if value.size != j.nq:
                     raise SceneError(f"{where}expected {j.nq} value(s) for a {j.kind} joint, "
                                      f"got {value.size}")
-                q[j.iq:j.iq + j.nq] = _tree_order(j, value)
+                q[j.iq:j.iq + j.nq] = tree_order(j, value)
             fixed_q.update(range(j.iu, j.iu + j.nv))
     for k, value in rates.items():
         j = tree.joints[tree.of_scene[k][1]]
         if j.kind == "spherical":  # the scene's joint frame -> the tree's moving one
             u[j.iu:j.iu + 3] = joint_rates(j, q[j.iq:j.iq + 4], np.eye(3)).T @ value  # a turn
         else:
-            u[j.iu:j.iu + j.nv] = _tree_order(j, value)
+            u[j.iu:j.iu + j.nv] = tree_order(j, value)
         fixed_u.update(range(j.iu, j.iu + j.nv))
     for name, (v, w) in scene.initial.velocities.items():
         i = next(i for i, b in enumerate(tree.bodies) if b.name == name)

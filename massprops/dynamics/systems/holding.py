@@ -21,7 +21,7 @@ import numpy as np
 from massprops.dynamics.systems import tree as tr
 from massprops.dynamics.systems.loops import terms
 
-__all__ = ["LOOP_RULE", "holding"]
+__all__ = ["LOOP_RULE", "by_scene_joint", "holding", "motor_forces"]
 
 LOOP_RULE = ("minimum-norm: the loops' constraint forces take the load the motors need not "
              "give; the motors' forces are the smallest (Euclidean norm) that hold the pose (a "
@@ -46,16 +46,26 @@ def _multipliers(g: np.ndarray, motor: np.ndarray, act: np.ndarray,
     return lam
 
 
+def motor_forces(system, t: float, q: np.ndarray, u: np.ndarray,
+                 udot: np.ndarray | None = None):
+    """(motor (nv,), kinematics, the joints' own forces τ (nv,)) of a tree moving with rates
+    ``u`` and accelerations ``udot`` (None: 0) at ``q``, time ``t``: motor = M u̇ + h(q, u) − τ,
+    what the motors add to the joints' springs, dampers and drives (RNEA: the bodies' net
+    forces summed from the leaves in, projected on each joint's axes). Tree coordinates; loops'
+    constraint forces are not in it (`holding` splits them)."""
+    tree = system.tree
+    kin = tr.kinematics(tree, q, u, udot)
+    fext, tau = system.applied(t, kin, q, u)
+    h = tr.generalized(tree, kin, tr.transmitted(tree, tr.body_forces(tree, kin, fext)))
+    return h - tau, kin, tau
+
+
 def holding(system, t: float, y: np.ndarray) -> list[np.ndarray]:
     """Per scene joint (scene order), the generalised forces (one per rate) its motor must exert
     to hold the configuration of state ``y`` at rest at time ``t``."""
-    tree, scene = system.tree, system.scene
+    tree = system.tree
     q = y[:system.nq]
-    rest = np.zeros(system.nv)
-    kin = tr.kinematics(tree, q, rest)
-    fext, tau = system.applied(t, kin, q, rest)
-    h = tr.generalized(tree, kin, tr.transmitted(tree, tr.body_forces(tree, kin, fext)))
-    motor = h - tau
+    motor, kin, _ = motor_forces(system, t, q, np.zeros(system.nv))
     if system.m:
         g = terms(tree.prims, kin, tr.jacobians(tree, kin), system.nv, tree.size,
                   tree.couplings, q)[1]
@@ -64,6 +74,13 @@ def holding(system, t: float, y: np.ndarray) -> list[np.ndarray]:
                         for i in range(j.iu, j.iu + j.nv) if i not in followers], dtype=int)
         lam = _multipliers(g, motor, act, np.array(sorted(followers), dtype=int))
         motor = motor - g.T @ lam
+    return by_scene_joint(system, q, motor)
+
+
+def by_scene_joint(system, q: np.ndarray, motor: np.ndarray) -> list[np.ndarray]:
+    """Tree generalised forces ``motor`` (nv,) per scene joint, in the scene's signs and order
+    (a cut joint's: zeros; a ball's: a torque in its moving frame, as its rates)."""
+    tree, scene = system.tree, system.scene
     out = []
     for k, sj in enumerate(scene.joints):
         where, n = tree.of_scene[k]

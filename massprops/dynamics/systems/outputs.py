@@ -225,7 +225,7 @@ def reference(system, t: np.ndarray, y: np.ndarray,
         pos[s], vel[s] = kin.com + kin.ref, kin.V[:, 3:] + np.cross(kin.V[:, :3], kin.com)
         omega[s] = kin.V[:, :3]
         quat[s] = canonical(matrix_to_quat(kin.rotation))
-        _reactions(system, float(t[s]), y[s], sol, force[s], torque[s])
+        reactions(system, float(t[s]), y[s], sol, force[s], torque[s])
         for k in range(nj):
             c, r = _joint_state(system, k, y[s], kin)
             coords[k][s], rates[k][s] = c, r
@@ -271,11 +271,18 @@ def _at_point(f: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return f[3:], f[:3] - tr.cross(p, f[3:])
 
 
-def _reactions(system, t: float, y: np.ndarray, sol, force: np.ndarray, torque: np.ndarray):
+def reactions(system, t: float, y: np.ndarray, sol, force: np.ndarray, torque: np.ndarray,
+              motor: np.ndarray | None = None) -> None:
+    """Each scene joint's reaction on its second body at its point (world; into ``force`` and
+    ``torque`` (J, 3)) at state ``y`` with the accelerations and multipliers of ``sol``; a
+    joint's own drive, and ``motor`` (nv,) where motors act, are not reactions (what acts along
+    a one-axis joint's axis is left out)."""
     scene, tree = system.scene, system.tree
     kin = sol.kin
     q, u = y[:system.nq], y[system.nq:]
     fext, tau = system.applied(t, kin, q, u)
+    if motor is not None:
+        tau = tau + motor
     net = tr.body_forces(tree, kin, fext)
     cut_b = np.zeros((len(tree.cut), 6))
     r = 0

@@ -1,0 +1,144 @@
+"""`massprops torques`: inverse dynamics along a motion against Pinocchio's RNEA at every sample,
+the work of the motors against the change of the arm's energy, the spline's error bar against
+the true error of a sampled motion, and --check against the description's effort limits."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import robot_arms as ra
+from conftest import json_lines
+
+from massprops.dynamics import any_scene
+from massprops.torques import read_motion, torques_along
+from massprops.torques.motion import motion_text, trapezoid
+
+T = np.linspace(0.0, 2.0, 401)
+
+
+def paths(t):
+    """q, q̇, q̈ of a smooth motion of the arm's five joints (sines of different rates)."""
+    amp = {"yaw": 0.8, "shoulder": 0.5, "elbow": 0.7, "slide": 0.04, "wrist": 1.0}
+    rate = {"yaw": 1.0, "shoulder": 2.0, "elbow": 3.0, "slide": 1.5, "wrist": 2.5}
+    q = {n: a * np.sin(rate[n] * t) for n, a in amp.items()}
+    qd = {n: a * rate[n] * np.cos(rate[n] * t) for n, a in amp.items()}
+    qdd = {n: -a * rate[n] ** 2 * np.sin(rate[n] * t) for n, a in amp.items()}
+    return q, qd, qdd
+
+
+def arm(tmp_path):
+    path = tmp_path / "arm.urdf"
+    path.write_text(ra.urdf())
+    return path
+
+
+def motion_file(tmp_path, exact: bool, t=T):
+    q, qd, qdd = paths(t)
+    columns = dict(q)
+    if exact:
+        columns.update({f"{n}.rate": v for n, v in qd.items()})
+        columns.update({f"{n}.acc": v for n, v in qdd.items()})
+    path = tmp_path / ("exact.csv" if exact else "sampled.csv")
+    path.write_text(motion_text(t, columns))
+    return path
+
+
+@pytest.mark.timeout(120)
+def test_torques_are_pinocchios_rnea_at_every_sample(tmp_path):
+    pin = pytest.importorskip("pinocchio")
+    scene = any_scene.load(arm(tmp_path), 0.0)
+    result = torques_along(scene, read_motion(motion_file(tmp_path, exact=True)))
+    model = pin.buildModelFromXML(ra.urdf())
+    data = model.createData()
+    names = list(model.names)[1:]
+    q, qd, qdd = paths(T)
+    worst = 0.0
+    for i in range(0, len(T), 20):
+        tau = pin.rnea(model, data, np.array([q[n][i] for n in names]),
+                       np.array([qd[n][i] for n in names]), np.array([qdd[n][i] for n in names]))
+        ours = np.array([result.rows[i]["joints"][n]["torque"][0] for n in names])
+        worst = max(worst, float(np.max(np.abs(ours - tau))))
+        assert result.rows[i]["bar"] == 0.0  # rates and accelerations given: exact
+    assert worst < 1e-11
+
+
+@pytest.mark.timeout(120)
+def test_the_motors_work_is_the_arms_energy_change(tmp_path):
+    """∫ Σ τ q̇ dt = ΔE: nothing else does work (no springs, no dampers in this arm)."""
+    pin = pytest.importorskip("pinocchio")
+    t = np.linspace(0.0, 2.0, 4001)
+    scene = any_scene.load(arm(tmp_path), 0.0)
+    result = torques_along(scene, read_motion(motion_file(tmp_path, exact=True, t=t)))
+    power = np.array([sum(j["power"][0] for j in r["joints"].values()) for r in result.rows])
+    work = trapezoid(power, t)
+    model = pin.buildModelFromXML(ra.urdf())
+    data = model.createData()
+    names = list(model.names)[1:]
+    q, qd, _ = paths(t)
+
+    def energy(i):
+        qi, vi = (np.array([d[n][i] for n in names]) for d in (q, qd))
+        return pin.computeKineticEnergy(model, data, qi, vi) + \
+            pin.computePotentialEnergy(model, data, qi)
+
+    change = energy(-1) - energy(0)
+    # the trapezoid rule's own error at 4001 samples: ~1e-7 of the power's scale
+    assert work == pytest.approx(change, abs=1e-6 * max(1.0, abs(change)))
+    total = sum(m["energy"][0] for m in result.summary["summary"].values())
+    assert total == pytest.approx(work, rel=1e-12)
+
+
+@pytest.mark.timeout(120)
+def test_the_splines_bar_covers_its_true_error(tmp_path):
+    scene = any_scene.load(arm(tmp_path), 0.0)
+    t = np.linspace(0.0, 2.0, 101)
+    exact = torques_along(scene, read_motion(motion_file(tmp_path, exact=True, t=t)))
+    sampled = torques_along(scene, read_motion(motion_file(tmp_path, exact=False, t=t)))
+    inner = range(10, len(t) - 10)  # the not-a-knot ends err more: they are reported so
+    for i in inner:
+        true = max(abs(sampled.rows[i]["joints"][n]["torque"][0]
+                       - exact.rows[i]["joints"][n]["torque"][0]) for n in exact.rows[i]["joints"])
+        bar = sampled.rows[i]["bar"]
+        assert true <= 3 * bar + 1e-12  # an estimate, not a bound: within a small factor
+        assert bar < 1e-3  # the sampling is fine: the bar is small, not a shrug
+
+
+@pytest.mark.timeout(120)
+def test_check_fails_naming_the_joint_when_a_peak_passes_its_limit(run, tmp_path):
+    urdf = ra.urdf()
+    shoulder = urdf[urdf.find('<joint name="shoulder"'):]
+    shoulder = shoulder[:shoulder.find("</joint>")]
+    assert 'effort="50"' in shoulder  # the arm states 50 N·m; the motion needs ~5 N·m there
+    limited = urdf.replace(shoulder, shoulder.replace('effort="50"', 'effort="1.0"'))
+    path = tmp_path / "limited.urdf"
+    path.write_text(limited)
+    motion = motion_file(tmp_path, exact=True)
+    res = run("torques", path, motion, "--check", "--json")
+    assert res.exit_code == 4
+    summary = json_lines(res.stdout)[-1]
+    assert summary["check"] == "fail" and summary["summary"]["shoulder"]["limit"] == [1.0]
+    assert "joint shoulder needs" in res.stderr and "beyond its limit 1" in res.stderr
+    ok = run("torques", path, motion, "--json")
+    assert ok.exit_code == 0 and json_lines(ok.stdout)[-1]["check"] == "not checked"
+
+
+def test_a_motion_naming_an_unknown_joint_is_one_line(run, tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,knee\n" + "".join(f"{k / 10},{k / 100}\n" for k in range(12)))
+    res = run("torques", arm(tmp_path), bad)
+    assert res.exit_code == 1
+    errors = [line for line in res.stderr.splitlines() if line.startswith("massprops: error")]
+    assert len(errors) == 1 and "no joint 'knee'" in errors[0]
+    assert "Traceback" not in res.stderr
+
+
+@pytest.mark.timeout(120)
+def test_csv_rows(run, tmp_path):
+    res = run("torques", arm(tmp_path), motion_file(tmp_path, exact=True), "--format", "csv")
+    assert res.exit_code == 0, res.stderr
+    lines = res.stdout.splitlines()
+    assert lines[0].startswith("t,yaw.torque,yaw.power,shoulder.torque")
+    assert len(lines) == len(T) + 1
+    assert json.loads(res.stderr.strip().splitlines()[-1])["samples"] == len(T)
