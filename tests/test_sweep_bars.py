@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 from conftest import box_vf, json_lines
-from test_sweep import G, I_ROD, M, OUT, THETA0, pendulum, rows_of, theta
+from test_sweep import I_ROD, OUT, THETA0, G, M, pendulum, rows_of, theta
 
 from massprops.inspection.file import inspect_file
 from massprops.robot.doctor.bounds import bounds_of

@@ -108,9 +108,9 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
         # deferred: each command imports only what it runs (start-up of the others)
         from massprops.batch.pool import end_helper_processes, stop_pool
         from massprops.dynamics.compiled.compiling import whole_process
+        from massprops.errors import UsageError
         from massprops.io.atomic import OutputKind, atomic_write_bytes, check_output
         from massprops.sweep import prepare, summarize
-        from massprops.errors import UsageError
         from massprops.sweep.run import start_pool
 
         if bars_scale is not None and not use_bars:  # one line, as the library's refusals
