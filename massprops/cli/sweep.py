@@ -40,15 +40,22 @@ class _Counter:
 
 @cli.command()
 @click.argument("scene_path", metavar="SCENE")
-@click.option("--vary", "varies", multiple=True, metavar="KEY=SPEC", required=True,
+@click.option("--vary", "varies", multiple=True, metavar="KEY=SPEC",
               help="A scene value and how it varies (repeatable): KEY a path such as "
-                   "body.mass, bodies.upper.inertia, forces[0].stiffness, "
-                   "initial.angular_velocity[1]; SPEC normal:MEAN:SD, uniform:LOW:HIGH, "
-                   "lognormal:MEDIAN:FACTOR, relative:P (e.g. relative:5%) or values:A,B,C.")
+                   "body.mass, bodies.upper.inertia, body.center_of_mass[2], "
+                   "forces[0].stiffness, initial.angular_velocity[1]; SPEC normal:MEAN:SD, "
+                   "uniform:LOW:HIGH, lognormal:MEDIAN:FACTOR, relative:P (e.g. relative:5%) "
+                   "or values:A,B,C.")
 @click.option("--samples", type=click.IntRange(min=1), default=None,
               help="Draws (per grid point); not needed when every value is a grid.")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Sample i's draws depend on the seed and i only.")
+@click.option("--bars", "use_bars", is_flag=True,
+              help="Draw every mesh body's mass, centre of mass and inertia within the error "
+                   "bars inspect reports for its mesh (each bar a bound: uniform within it).")
+@click.option("--bars-scale", type=float, default=None, metavar="K",
+              help="Widen --bars K times (e.g. to a density or machining tolerance); "
+                   "default 1.")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,
               help="Local worker processes (default, for a sweep of more than a few seconds: "
                    "one per core, or per two cores with the error estimate; else this process).")
@@ -80,7 +87,8 @@ class _Counter:
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 @click.pass_context
 def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples: int | None,
-          seed: int, jobs: int | None, scheduler: str | None, outputs: str | None,
+          seed: int, use_bars: bool, bars_scale: float | None, jobs: int | None,
+          scheduler: str | None, outputs: str | None,
           as_json: bool, out_format: str | None, output_path: str | None,
           integrator: str | None, rtol: float | None, step: float | None,
           plot_path: str | None, linear: bool,
@@ -92,6 +100,7 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
     if scheduler is not None and jobs is not None:
         raise click.UsageError("--jobs and --scheduler contradict: the cluster's workers run "
                                "the sweep; give one")
+    bars = (1.0 if bars_scale is None else bars_scale) if use_bars else None
     fmt = "json" if as_json else out_format
     state: dict[str, Any] = {"failed": False, "interrupted": False}
 
@@ -99,10 +108,13 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
         # deferred: each command imports only what it runs (start-up of the others)
         from massprops.batch.pool import end_helper_processes, stop_pool
         from massprops.dynamics.compiled.compiling import whole_process
+        from massprops.errors import UsageError
         from massprops.io.atomic import OutputKind, atomic_write_bytes, check_output
         from massprops.sweep import prepare, summarize
         from massprops.sweep.run import start_pool
 
+        if bars_scale is not None and not use_bars:  # one line, as the library's refusals
+            raise UsageError("--bars-scale widens --bars; give --bars too")
         rows_format = fmt or ("json" if output_path and output_path.endswith((".json",
                                                                               ".jsonl"))
                               else "csv")
@@ -132,7 +144,7 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
             prepared = prepare(scene_path, varies, samples=samples, seed=seed,
                                outputs=outputs.split(",") if outputs else None,
                                options=options, series=plot_path is not None,
-                               notice=say_note)
+                               bars=bars, notice=say_note)
             rows, lines, interrupted = _rows(prepared, jobs, executor, workers, rows_format,
                                              fmt is not None and not output_path, quiet)
         finally:
@@ -142,7 +154,8 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
                 stop_pool(executor)
             end_helper_processes()
         state["interrupted"] = interrupted
-        result = summarize(rows, prepared.plan.outputs, [v.key for v in prepared.plan.varies])
+        result = summarize(rows, prepared.plan.outputs,
+                           [key for key, _ in prepared.plan.value_keys])
         if plot_path:
             from massprops.sweep.plots import plot_sweep  # deferred: matplotlib
 

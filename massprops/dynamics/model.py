@@ -27,6 +27,7 @@ from massprops.tolerances import (
 
 if TYPE_CHECKING:
     from massprops.dynamics.joints.model import Joint
+    from massprops.mesh.integral import ErrorBars
 
 INF = math.inf
 
@@ -40,6 +41,19 @@ def _vec3(x, name: str) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
+class MeshSource:
+    """Where a mesh body's mass properties came from, kept for what varies them within their
+    error bars (``sweep --bars``): the file ``path`` read in ``unit``, inspect's centre of mass
+    ``center_of_mass`` (3,) m in the mesh frame, and its error bars ``bars`` (rounding, input,
+    repair: absolute bounds, `massprops.mesh.integral.ErrorBars`)."""
+
+    path: str
+    unit: str
+    center_of_mass: np.ndarray
+    bars: ErrorBars
+
+
+@dataclass(frozen=True, eq=False)
 class RigidBody:
     """Mass properties as the dynamics needs them.
 
@@ -50,6 +64,7 @@ class RigidBody:
     center_of_mass : (3,) float, m, the COM in body coordinates.
     size : float, m, a length scale of the body (used to make position errors relative): the
         larger of the bounding radius about the COM and the largest radius of gyration.
+    mesh : a mesh body's file and inspect's bars (`MeshSource`); None for an explicit body.
     """
 
     mass: float
@@ -57,6 +72,7 @@ class RigidBody:
     principal_axes: np.ndarray
     center_of_mass: np.ndarray
     size: float
+    mesh: MeshSource | None = None
 
     @property
     def inertia_body(self) -> np.ndarray:

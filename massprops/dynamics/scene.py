@@ -30,6 +30,7 @@ from massprops.dynamics.model import (
     ForceTerm,
     Gravity,
     InitialState,
+    MeshSource,
     OutputSettings,
     PointForce,
     RigidBody,
@@ -173,7 +174,9 @@ def _mesh_body(spec: _MeshBodySpec) -> tuple[RigidBody, tuple[str, ...]]:
         raise _with_place(type(exc)(f"{spec.path.name}: {exc.template}"), spec.field) from exc
     used = mesh.vertices[np.unique(mesh.faces)]
     bounding_radius = float(np.linalg.norm(used - body.center_of_mass, axis=1).max())
-    return dataclasses.replace(body, size=max(bounding_radius, body.size)), tuple(health.warnings)
+    source = MeshSource(str(spec.path), spec.unit, props.center_of_mass, props.uncertainty)
+    return (dataclasses.replace(body, size=max(bounding_radius, body.size), mesh=source),
+            tuple(health.warnings))
 
 
 def _mesh_files(path: Path) -> tuple[Path, ...]:

@@ -6,7 +6,8 @@ Modules, in the order a sweep uses them:
 - `keys`: paths to scene values (``bodies.upper.mass``, ``forces[0].stiffness``) and to a run's
   outputs (``final.joints.elbow.force``);
 - `specs`: how a value varies (normal, uniform, lognormal, relative, a grid of values);
-- `inertials`: a body's mass and inertia varied as a body's can be, every draw a valid inertial;
+- `inertials`: a body's mass, inertia and centre of mass varied as a body's can be, and a
+  mesh body's within inspect's error bars (``--bars``), every draw a valid inertial;
 - `sample`: one sample (its values from the seed and its index alone, its scene, its run);
 - `run`: the plan checked and run once, then every sample, here or on a pool or a Dask
   cluster, rows in sample order;

@@ -10,6 +10,7 @@ back in sample order as soon as they and every row before them are done.
 from __future__ import annotations
 
 import itertools
+import math
 import os
 from collections.abc import Callable, Generator, Sequence
 from dataclasses import dataclass
@@ -20,7 +21,15 @@ from massprops.dynamics.scene import scene_text
 from massprops.dynamics.systems.robot_scene import is_description
 from massprops.errors import UsageError
 from massprops.sweep import keys
-from massprops.sweep.sample import Plan, Row, Vary, check_plan, mass_change, run_chunk
+from massprops.sweep.sample import (
+    Plan,
+    Row,
+    Vary,
+    bar_bodies,
+    check_plan,
+    mass_change,
+    run_chunk,
+)
 from massprops.sweep.specs import parse_spec
 
 if TYPE_CHECKING:  # concurrent.futures (and logging) load only when a pool is used
@@ -62,21 +71,27 @@ class Prepared:
 def prepare(path: str | os.PathLike, varies: Sequence[str], *, samples: int | None,
             seed: int = 0, outputs: Sequence[str] | None = None,
             options: dict[str, Any] | None = None, description: dict[str, Any] | None = None,
-            series: bool = False, notice: Callable[[str], None] | None = None) -> Prepared:
+            series: bool = False, bars: float | None = None,
+            notice: Callable[[str], None] | None = None) -> Prepared:
     """The sweep of the scene at ``path`` (a YAML scene or a robot description) with ``varies``
     (``KEY=SPEC`` each), ``samples`` draws (per grid point; None: grids only, one each),
     ``outputs`` (names into a run's JSON, default `default_outputs`), ``options`` for
     `any_scene.simulate` (integrator, rtol, step, max_steps, estimate); ``series``: every row
-    also carries its outputs at SERIES_POINTS + 1 times (for `plots`). Runs the nominal scene
+    also carries its outputs at SERIES_POINTS + 1 times (for `plots`); ``bars``: every mesh
+    body drawn within this many times inspect's bars (``--bars --bars-scale K``; None: not).
+    Runs the nominal scene
     twice (``notice`` tells of a kernel compile; the second run is warm: what a sample costs).
     SceneError / RobotModelError (exit 1), UsageError (exit 2)."""
     parsed = tuple(parse_vary(v) for v in varies)
-    if not parsed:
-        raise UsageError("a sweep needs at least one --vary KEY=SPEC")
+    if not parsed and bars is None:
+        raise UsageError("a sweep needs at least one --vary KEY=SPEC (or --bars)")
+    if bars is not None and not (math.isfinite(bars) and bars > 0):
+        raise UsageError(f"--bars-scale {bars!r}: expected a positive number (1: the bars "
+                         "inspect reports)")
     if len({v.key for v in parsed}) < len(parsed):
         raise UsageError("--vary: a key is given twice")
     grids = [v for v in parsed if v.spec.is_grid]
-    if samples is None and len(grids) < len(parsed):
+    if samples is None and (len(grids) < len(parsed) or bars is not None):
         raise UsageError("--samples N is needed when a value is drawn (only values: grids "
                          "run without it)")
     draws = 1 if samples is None else samples
@@ -91,6 +106,7 @@ def prepare(path: str | os.PathLike, varies: Sequence[str], *, samples: int | No
     folder = os.path.dirname(os.path.abspath(source))
     plan = Plan(source, text, parsed, seed, draws, grid, (), run_options, described, folder)
     scene = check_plan(plan)
+    found_bars = bar_bodies(plan, scene) if bars is not None else ()
     any_scene.simulate(scene, notice=notice, **dict(run_options))  # compiles or loads kernels
     result = any_scene.simulate(scene, **dict(run_options))
     found = result.as_dict()
@@ -104,7 +120,7 @@ def prepare(path: str | os.PathLike, varies: Sequence[str], *, samples: int | No
                              f"defaults: {', '.join(default_outputs(found))})") from None
     every = scene.time.duration / SERIES_POINTS if series else None
     plan = Plan(source, text, parsed, seed, draws, grid, names, run_options, described, folder,
-                every)
+                every, bars, found_bars)
     return Prepared(plan, nominal, float(found["wall_time_s"]))
 
 

@@ -5,6 +5,15 @@ and i alone, so any number of workers, in any order, give the same rows. The sce
 (``forces[0].stiffness``) are written into its document, which is then read as the file would
 be; a body's mass properties (``body.mass``, ``bodies.upper.inertia``) are changed on the body
 read, as `inertials` says (for a robot's links too, which no scene text holds).
+
+A body's centre of mass (``body.center_of_mass[i]``, ``bodies.NAME.center_of_mass[i]``, or
+``--bars``) moves within the body, the body itself staying where it is: its frame, its joints'
+points and every body point keep their places and velocities at t = 0, so the COM's start moves
+with it (x' = x + R0 δ, v' = v + ω × R0 δ for a shift δ in body axes, R0 the body's turn at
+t = 0). A one-body scene's joint written without a point (at the centre of mass) keeps the
+nominal centre as its point; a force written without one stays at the (moved) centre of mass.
+A system body's centre in its body frame is its mesh's centre of mass in the mesh frame (an
+explicit body or a robot link: 0, its frame's origin being its centre of mass at ``position``).
 """
 
 from __future__ import annotations
@@ -23,8 +32,16 @@ import yaml
 from massprops.dynamics import any_scene
 from massprops.dynamics.yamlnodes import compose
 from massprops.errors import MassPropsError, SceneError, UsageError, error_message
+from massprops.rotation import quat_to_matrix
 from massprops.sweep import keys
-from massprops.sweep.inertials import MASS_KEYS, MassChange, draw_valid, shape_bounds
+from massprops.sweep.inertials import (
+    MASS_KEYS,
+    Bars,
+    MassChange,
+    draw_valid,
+    prefix,
+    shape_bounds,
+)
 from massprops.sweep.specs import Spec
 
 
@@ -60,6 +77,11 @@ class Plan:
     series_every: float | None = None
     """Where set, each run is sampled every this many seconds and its rows carry each output's
     values over time (``Row.series``, for ``--plot``)."""
+    bars: float | None = None
+    """``--bars-scale`` K where ``--bars`` is given (every mesh body drawn within K times
+    inspect's bars, `inertials.Bars`), else None."""
+    bar_bodies: tuple[str | None, ...] = ()
+    """The bodies ``--bars`` draws (None: a ``body:`` scene's one), found by `check_plan`."""
 
     @property
     def count(self) -> int:
@@ -68,6 +90,19 @@ class Plan:
     @property
     def grid_keys(self) -> tuple[Vary, ...]:
         return tuple(v for v in self.varies if v.spec.is_grid)
+
+    @property
+    def value_keys(self) -> tuple[tuple[str, str], ...]:
+        """Every key a row's ``values`` holds, in column order, with its shape: "scalar",
+        "vector" (a ``--bars`` centre of mass, (3,) m body frame) or "tensor" (an inertia,
+        (3, 3) kg·m² about the COM, body axes)."""
+        out = [(v.key, "tensor" if v.mass is not None and v.mass.what == "inertia"
+                else "scalar") for v in self.varies]
+        for body in self.bar_bodies:
+            out += [(f"{prefix(body)}.mass", "scalar"),
+                    (f"{prefix(body)}.center_of_mass", "vector"),
+                    (f"{prefix(body)}.inertia", "tensor")]
+        return tuple(out)
 
 
 @dataclass
@@ -92,21 +127,31 @@ class Row:
 
 
 def mass_change(key: str, steps: tuple[keys.Step, ...]) -> MassChange | None:
-    """The body and quantity of a mass-property key (``body.mass``, ``bodies.NAME.inertia``),
-    else None."""
-    if len(steps) == 2 and steps[0] == "body" and steps[1] in MASS_KEYS:
-        return MassChange(key, None, str(steps[1]))
-    if len(steps) == 3 and steps[0] == "bodies" and isinstance(steps[1], str) \
+    """The body and quantity of a mass-property key (``body.mass``, ``bodies.NAME.inertia``,
+    ``body.center_of_mass[2]``), else None; UsageError for a centre of mass without a valid
+    component."""
+    if len(steps) >= 2 and steps[0] == "body" and steps[1] in MASS_KEYS:
+        body, rest = None, steps[1:]
+    elif len(steps) >= 3 and steps[0] == "bodies" and isinstance(steps[1], str) \
             and steps[2] in MASS_KEYS:
-        return MassChange(key, steps[1], str(steps[2]))
-    return None
+        body, rest = steps[1], steps[2:]
+    else:
+        return None
+    if rest[0] != "center_of_mass":
+        return MassChange(key, body, str(rest[0])) if len(rest) == 1 else None
+    if len(rest) != 2 or not isinstance(rest[1], int) or rest[1] > 2:
+        raise UsageError(f"--vary {key}: a centre of mass varies by component, "
+                         f"{keys.show_path(steps[:len(steps) - len(rest) + 1])}[i] with i "
+                         "0, 1 or 2 (body axes, m)")
+    return MassChange(key, body, "center_of_mass", rest[1])
 
 
 # --- a worker's copy of the scene -------------------------------------------------------------
 @dataclass(frozen=True)
 class _Nominal:
     scene: Any
-    bounds: Any  # the one mesh body's shape (`inertials.shape_bounds`), else None
+    bounds: dict  # body (None: the one) -> its mesh's shape (`inertials.shape_bounds`)
+    bars: dict  # body -> its `inertials.Bars` (``--bars``)
 
 
 def load(plan: Plan) -> Any:
@@ -121,20 +166,25 @@ def load(plan: Plan) -> Any:
     return any_scene.parse(plan.text, source=plan.path, base_dir=plan.folder)
 
 
+def mesh_bodies(scene: Any) -> dict[str | None, tuple[Any, np.ndarray]]:
+    """The scene's mesh bodies: body (None: a ``body:`` scene's) -> (its `MeshSource`, its
+    inertia (3, 3) kg·m² about the COM, body axes = mesh axes)."""
+    if any_scene.is_system(scene):
+        return {b.name: (b.mesh, b.inertia) for b in scene.bodies if b.mesh is not None}
+    body = scene.body
+    return {None: (body.mesh, body.inertia_body)} if body.mesh is not None else {}
+
+
 @functools.lru_cache(maxsize=2)
 def _nominal(plan: Plan) -> _Nominal:
     scene = load(plan)
-    bounds = None
-    body_source = getattr(scene, "body_source", "explicit")
-    if any(v.mass is not None for v in plan.varies) and body_source != "explicit":
-        bounds = shape_bounds(body_source, _mesh_unit(plan))
-    return _Nominal(scene, bounds)
-
-
-def _mesh_unit(plan: Plan) -> str:
-    """The one mesh body's ``unit`` as its scene writes it (metres when it says none)."""
-    root = compose(plan.text or "", plan.path)
-    return (keys.text_at(root, ("body", "unit")) if root is not None else None) or "m"
+    meshes = mesh_bodies(scene)
+    varied = {v.mass.body for v in plan.varies if v.mass is not None} | set(plan.bar_bodies)
+    bounds = {body: shape_bounds(source.path, source.unit)
+              for body, (source, _) in meshes.items() if body in varied}
+    bars = {body: Bars.of(meshes[body][0], meshes[body][1], plan.bars)
+            for body in plan.bar_bodies if plan.bars is not None}
+    return _Nominal(scene, bounds, bars)
 
 
 # --- one sample -------------------------------------------------------------------------------
@@ -192,12 +242,14 @@ def scene_value(plan: Plan, vary: Vary) -> float | None:
     """The value the scene writes at ``vary``'s key (a body's mass as read), None for an
     inertia tensor."""
     if vary.mass is not None:
-        if vary.mass.what != "mass":
+        if vary.mass.what == "inertia":
             return None
         scene = _nominal(plan).scene
-        if vary.mass.body is None:
-            return float(scene.body.mass)
-        return float(next(b.mass for b in scene.bodies if b.name == vary.mass.body))
+        body = scene.body if vary.mass.body is None else next(
+            b for b in scene.bodies if b.name == vary.mass.body)
+        if vary.mass.what == "mass":
+            return float(body.mass)
+        return float(_body_com(body)[vary.mass.axis])
     root = compose(plan.text or "", plan.path)
     assert root is not None
     return keys.value_at(keys.find(root, vary.steps, plan.path))
@@ -212,7 +264,7 @@ def run_at(plan: Plan, values: dict[str, float]) -> Row:
     """The scene run with every key at ``values`` (nothing drawn): `linear`'s runs."""
     start = time.perf_counter()
     row = Row(-1, {})
-    scene, _ = _scene(plan, values, np.random.default_rng(0), row.values)
+    scene, _ = _scene(plan, values, np.random.default_rng(0), row.values, bars=False)
     found = any_scene.simulate(scene, **dict(plan.options)).as_dict()
     row.outputs = {name: keys.read_output(found, keys.parse_path(name)) for name in plan.outputs}
     row.error_estimate = found["diagnostics"].get("error_estimate")
@@ -221,19 +273,26 @@ def run_at(plan: Plan, values: dict[str, float]) -> Row:
 
 
 def _scene(plan: Plan, fixed: dict[str, float], rng: np.random.Generator,
-           said: dict) -> tuple[Any, int]:
-    """The scene with the keys in ``fixed`` at those values and the others drawn, and its
-    mass-property redraws; every key's value into ``said``."""
+           said: dict, bars: bool = True) -> tuple[Any, int]:
+    """The scene with the keys in ``fixed`` at those values and the others drawn (``bars``:
+    ``--bars`` too, else its bodies as written), and its mass-property redraws; every key's
+    value into ``said``."""
     nominal = _nominal(plan)
     text_varies = [v for v in plan.varies if v.mass is None]
     scene = nominal.scene
     if text_varies:
         scene = _rewritten(plan, text_varies, fixed, rng, said)
+    changes: dict[str | None, list] = {}
+    for v in plan.varies:
+        if v.mass is not None:
+            changes.setdefault(v.mass.body, []).append(
+                (v.mass, _GridValue(fixed[v.key]) if v.key in fixed else v.spec))
+    for body in plan.bar_bodies if bars else ():
+        changes.setdefault(body, []).append(
+            (MassChange(prefix(body), body, "bars"), nominal.bars[body]))
     redrawn = 0
-    for body in dict.fromkeys(v.mass.body for v in plan.varies if v.mass is not None):
-        changes = [(v.mass, _GridValue(fixed[v.key]) if v.key in fixed else v.spec)
-                   for v in plan.varies if v.mass is not None and v.mass.body == body]
-        scene, n = _with_body(scene, body, changes, rng, nominal.bounds, said)
+    for body, body_changes in changes.items():
+        scene, n = _with_body(scene, body, body_changes, rng, nominal.bounds.get(body), said)
         redrawn += n
     return scene, redrawn
 
@@ -261,26 +320,61 @@ def _rewritten(plan: Plan, varies: list[Vary], fixed: dict, rng, said: dict) -> 
                            base_dir=plan.folder)
 
 
+def _body_com(body: Any) -> np.ndarray:
+    """A body's centre of mass (3,) m in its body frame (the module's rule)."""
+    if hasattr(body, "center_of_mass"):  # a one-body scene's RigidBody
+        return np.asarray(body.center_of_mass, dtype=np.float64)
+    return np.array(body.mesh.center_of_mass if body.mesh is not None else np.zeros(3),
+                    dtype=np.float64)
+
+
+def _moved_start(scene: Any, com: np.ndarray, shift: np.ndarray) -> Any:
+    """The one-body ``scene`` whose centre of mass moved by ``shift`` (3,) m, body axes, from
+    ``com``: its start and its point-less joints as the module says."""
+    ini = scene.initial
+    turn = quat_to_matrix(np.asarray(ini.orientation, dtype=np.float64))
+    moved = turn @ shift
+    omega = np.asarray(ini.angular_velocity, dtype=np.float64)
+    if ini.angular_velocity_frame == "body":
+        omega = turn @ omega
+    initial = dataclasses.replace(ini, position=np.asarray(ini.position) + moved,
+                                  velocity=np.asarray(ini.velocity) + np.cross(omega, moved))
+    joints = tuple(dataclasses.replace(j, point=com.copy()) if j.point is None else j
+                   for j in scene.joints)
+    return dataclasses.replace(scene, initial=initial, joints=joints)
+
+
 def _with_body(scene: Any, body: str | None, changes, rng, bounds, said: dict) -> tuple[Any, int]:
     """``scene`` with one body's mass properties drawn (`inertials.draw_valid`)."""
     if body is None:
         rigid = scene.body
-        m, j, values, n = draw_valid(rng, changes, rigid.mass, rigid.inertia_body,
-                                     rigid.center_of_mass, bounds)
+        com = _body_com(rigid)
+        m, j, c, values, n = draw_valid(rng, changes, rigid.mass, rigid.inertia_body, com,
+                                        bounds)
         said.update(values)
-        new = type(rigid).from_inertia(m, j, rigid.center_of_mass, size=rigid.size)
-        return dataclasses.replace(scene, body=new), n
+        new = type(rigid).from_inertia(m, j, c, size=rigid.size)
+        scene = dataclasses.replace(scene, body=new)
+        if np.any(c != com):
+            scene = _moved_start(scene, com, c - com)
+        return scene, n
     names = [b.name for b in scene.bodies] if any_scene.is_system(scene) else []
     if body not in names:
         raise SceneError(f"{scene.source}: sweep key bodies.{body}: the scene has no body "
                          f"{body!r}" + (f" (its bodies: {', '.join(names)})" if names else ""))
     k = names.index(body)
     b = scene.bodies[k]
-    m, j, values, n = draw_valid(rng, changes, b.mass, b.inertia, np.zeros(3), None)
+    com = _body_com(b)
+    m, j, c, values, n = draw_valid(rng, changes, b.mass, b.inertia, com, bounds)
     said.update(values)
+    moved = np.asarray(b.rotation0, dtype=np.float64) @ (c - com)
     bodies = list(scene.bodies)
-    bodies[k] = dataclasses.replace(b, mass=m, inertia=j)
-    return dataclasses.replace(scene, bodies=tuple(bodies)), n
+    bodies[k] = dataclasses.replace(b, mass=m, inertia=j, com0=np.asarray(b.com0) + moved)
+    initial = scene.initial
+    if body in initial.velocities:  # a floating body: its points keep their velocities
+        v, w = initial.velocities[body]
+        initial = dataclasses.replace(initial, velocities={
+            **initial.velocities, body: (np.asarray(v) + np.cross(w, moved), w)})
+    return dataclasses.replace(scene, bodies=tuple(bodies), initial=initial), n
 
 
 def check_plan(plan: Plan) -> Any:
@@ -308,3 +402,18 @@ def check_plan(plan: Plan) -> Any:
         if v.mass.body is not None:
             _with_body(nominal, v.mass.body, [], None, None, {})  # names the missing body
     return nominal
+
+
+def bar_bodies(plan: Plan, scene: Any) -> tuple[str | None, ...]:
+    """The bodies ``--bars`` draws: every mesh body of ``scene`` (the plan's, as written);
+    UsageError (exit 2) when it has none or a --vary varies one of theirs too."""
+    found = tuple(mesh_bodies(scene))
+    if not found:
+        raise UsageError(f"--bars: {plan.path} has no mesh body (its mass properties are "
+                         "given, without inspect's error bars); vary them with --vary "
+                         "bodies.NAME.mass=... instead")
+    for v in plan.varies:
+        if v.mass is not None and v.mass.body in found:
+            raise UsageError(f"--bars draws {prefix(v.mass.body)}'s mass properties; --vary "
+                             f"{v.key} would draw them twice: give one")
+    return found

@@ -1,7 +1,7 @@
 """A sweep's rows as CSV: ``sample, status, error, <KEY>..., <OUTPUT>[_x|_y|_z or _i]...,
 error_estimate`` (the contract). A 3-vector's components are _x, _y, _z, other lists' _0, _1,
-...; a drawn inertia tensor's six _xx, _yy, _zz, _xy, _xz, _yz; a failed sample's outputs are
-empty cells."""
+...; a drawn inertia tensor's six _xx, _yy, _zz, _xy, _xz, _yz, a ``--bars`` centre of mass's
+_x, _y, _z; a failed sample's outputs are empty cells."""
 
 from __future__ import annotations
 
@@ -26,31 +26,33 @@ def _suffixes(value: Any) -> list[str]:
     return list(_AXES) if len(flat) == 3 else [f"_{i}" for i in range(len(flat))]
 
 
-def _is_tensor_key(prepared: Prepared, key: str) -> bool:
-    return any(v.key == key and v.mass is not None and v.mass.what == "inertia"
-               for v in prepared.plan.varies)
-
-
 def header(prepared: Prepared) -> list[str]:
     """The CSV header of ``prepared``'s rows."""
     cols = ["sample", "status", "error"]
-    for v in prepared.plan.varies:
-        cols += [v.key + s for s, _, _ in _TENSOR] if _is_tensor_key(prepared, v.key) \
-            else [v.key]
+    for key, shape in prepared.plan.value_keys:
+        cols += [key + s for s in _value_suffixes(shape)]
     for name in prepared.plan.outputs:
         cols += [name + s for s in _suffixes(prepared.nominal[name])]
     return [*cols, "error_estimate"]
 
 
+def _value_suffixes(shape: str) -> list[str]:
+    return {"scalar": [""], "vector": list(_AXES), "tensor": [s for s, _, _ in _TENSOR]}[shape]
+
+
+def _value_cells(shape: str, value: Any) -> list[str]:
+    if value is None:
+        return [""] * len(_value_suffixes(shape))
+    if shape == "tensor":
+        return [repr(value[i][j]) for _, i, j in _TENSOR]
+    return [repr(x) for x in value] if shape == "vector" else [repr(value)]
+
+
 def cells(prepared: Prepared, row: Row) -> list[Any]:
     """One row's cells, as `header` names them."""
     out: list[Any] = [row.sample, row.status, row.error or ""]
-    for v in prepared.plan.varies:
-        value = row.values.get(v.key)
-        if _is_tensor_key(prepared, v.key):
-            out += [repr(value[i][j]) if value is not None else "" for _, i, j in _TENSOR]
-        else:
-            out.append(repr(value) if value is not None else "")
+    for key, shape in prepared.plan.value_keys:
+        out += _value_cells(shape, row.values.get(key))
     for name in prepared.plan.outputs:
         width = len(_suffixes(prepared.nominal[name]))
         value = None if row.outputs is None else row.outputs.get(name)

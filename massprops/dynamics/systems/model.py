@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from massprops.dynamics.model import OutputSettings, TimeSettings
+from massprops.dynamics.model import MeshSource, OutputSettings, TimeSettings
 
 WORLD = -1
 """Body index of the world (the ground) in joints and forces."""
@@ -31,7 +31,8 @@ ONE_AXIS = ("revolute", "prismatic")
 @dataclass(frozen=True, eq=False)
 class SystemBody:
     """name; mass kg; inertia (3, 3) kg·m² about the COM, body axes; rotation0 (3, 3) body ->
-    world at t = 0; com0 (3,) m world at t = 0; size m (a length scale)."""
+    world at t = 0; com0 (3,) m world at t = 0; size m (a length scale); mesh: a mesh body's
+    file and inspect's bars (`dynamics.model.MeshSource`, its axes the body axes), else None."""
 
     name: str
     mass: float
@@ -39,6 +40,7 @@ class SystemBody:
     rotation0: np.ndarray
     com0: np.ndarray
     size: float
+    mesh: MeshSource | None = None
 
 
 @dataclass(frozen=True, eq=False)

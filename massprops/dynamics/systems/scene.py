@@ -195,7 +195,7 @@ def _placed(name: str, body: RigidBody, placement: dict) -> SystemBody:
         com0 = np.asarray(placement["position"], float)
     else:  # the mesh frame is the world frame at t = 0
         com0 = rot @ body.center_of_mass
-    return SystemBody(name, body.mass, body.inertia_body, rot, com0, body.size)
+    return SystemBody(name, body.mass, body.inertia_body, rot, com0, body.size, body.mesh)
 
 
 # --- joints -------------------------------------------------------------------------------------
