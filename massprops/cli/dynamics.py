@@ -58,15 +58,22 @@ class _Progress:
             self.bar.stop()
 
 
+def method_options(f):
+    """--integrator, --rtol, --step: a run's method and its setting, over the scene's."""
+    f = click.option("--step", type=float, callback=positive,
+                     help="Step of fixed-step methods [s].")(f)
+    f = click.option("--rtol", type=float, callback=positive,
+                     help="Tolerance of adaptive methods.")(f)
+    return click.option("--integrator", type=RegistryChoice(_integrator_names), default=None,
+                        help="Overrides the scene's time.integrator.")(f)
+
+
 @cli.command()
 @click.argument("scene_path", metavar="SCENE")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object.")
 @click.option("--output", "output_path", default=None,
               help="Trajectory file (.csv or .npz); overrides the scene's output.file.")
-@click.option("--integrator", type=RegistryChoice(_integrator_names), default=None,
-              help="Overrides the scene's time.integrator.")
-@click.option("--rtol", type=float, callback=positive, help="Tolerance of adaptive methods.")
-@click.option("--step", type=float, callback=positive, help="Step of fixed-step methods [s].")
+@method_options
 @click.option("--every", type=float, callback=positive, help="Sampling interval [s].")
 @click.option("--plot", "plot_path", default=None,
               help="PNG of angular velocity, energy and angular-momentum drift over time.")

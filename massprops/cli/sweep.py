@@ -9,8 +9,8 @@ from typing import Any
 import click
 
 from massprops.cli.app import cli
-from massprops.cli.common import RegistryChoice, emit_json, guarded, positive, say_note
-from massprops.cli.dynamics import _integrator_names
+from massprops.cli.common import emit_json, guarded, say_note
+from massprops.cli.dynamics import method_options
 
 _ROWS_EXTENSIONS = {"csv": (".csv",), "json": (".jsonl", ".json")}
 
@@ -70,10 +70,7 @@ class _Counter:
               help="The rows as CSV (the summary then on stderr) or JSON lines.")
 @click.option("--output", "output_path", default=None,
               help="Write the rows to this file (.csv, or .jsonl for JSON) instead of stdout.")
-@click.option("--integrator", type=RegistryChoice(_integrator_names), default=None,
-              help="Overrides the scene's time.integrator.")
-@click.option("--rtol", type=float, callback=positive, help="Tolerance of adaptive methods.")
-@click.option("--step", type=float, callback=positive, help="Step of fixed-step methods [s].")
+@method_options
 @click.option("--plot", "plot_path", default=None,
               help="PNG of the outputs over time: the samples' median and 25-75 % and "
                    "5-95 % bands (pip install 'massprops[plot]').")

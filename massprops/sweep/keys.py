@@ -98,17 +98,6 @@ def find(root: yaml.Node, steps: tuple[Step, ...], source: str) -> Place:
     return Place(parent, index, node)
 
 
-def text_at(root: yaml.Node, steps: tuple[Step, ...]) -> str | None:
-    """The scalar written at ``steps`` in ``root``, or None where there is none."""
-    node = root
-    for step in steps:
-        found = _child(node, step)
-        if found is None:
-            return None
-        node = found[1]
-    return str(node.value) if isinstance(node, yaml.ScalarNode) else None
-
-
 def _is_number(text: str) -> bool:
     try:
         float(text)
