@@ -8,7 +8,8 @@ of its interpolating spline of order 5 (quintic, scipy's not-a-knot ends; at lea
 and the spline's own error is estimated from the sampling: the same spline through every other
 sample, whose acceleration error is 2⁴ = 16 times larger (a quintic's second derivative errs
 as h⁴), so the full spline's is about |a_h − a_2h| / 15 (Richardson). Given columns are exact:
-their bar is 0.
+their bar is 0. The bar is the sampling's error, not the data's: positions known to ε reach the
+accelerations as ~ε/h², which no spline can tell from motion.
 """
 
 from __future__ import annotations
