@@ -103,12 +103,11 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
 
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
-        from massprops.batch.pool import end_helper_processes, stop_pool
+        from massprops.batch.pool import end_helper_processes
         from massprops.dynamics.compiled.compiling import whole_process
         from massprops.errors import UsageError
         from massprops.io.atomic import OutputKind, atomic_write_bytes, check_output
-        from massprops.sweep import prepare, summarize
-        from massprops.sweep.run import start_pool
+        from massprops.sweep.session import Sweep
 
         if bars_scale is not None and not use_bars:  # one line, as the library's refusals
             raise UsageError("--bars-scale widens --bars; give --bars too")
@@ -118,50 +117,31 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
         kind = OutputKind("the rows", _ROWS_EXTENSIONS[rows_format], "output")
         if output_path:
             check_output(output_path, kind, force=force, protect=[scene_path])
+        protect = [scene_path, *([output_path] if output_path else [])]
         if plot_path:
             # deferred: matplotlib (the plot extra) loads only for --plot
             from massprops.dynamics.plots import plot_output, require_matplotlib
 
             require_matplotlib()
-            check_output(plot_path, plot_output(), force=force,
-                         protect=[scene_path, *([output_path] if output_path else [])])
+            check_output(plot_path, plot_output(), force=force, protect=protect)
         whole_process()
         options: dict[str, Any] = {"estimate": not no_estimate}
         options.update({k: v for k, v in (("integrator", integrator), ("rtol", rtol),
                                           ("step", step)) if v is not None})
-        executor: Any = None
-        workers, client = None, None
-        if scheduler is not None:
-            from massprops.batch import dask_executor  # deferred: only --scheduler
-
-            executor, workers, client = dask_executor(scheduler)
-        elif jobs is not None and jobs > 1:  # its workers boot while the scene is read and run
-            executor, workers = start_pool(jobs), jobs
         try:
-            prepared = prepare(scene_path, varies, samples=samples, seed=seed,
-                               outputs=outputs.split(",") if outputs else None,
-                               options=options, series=plot_path is not None,
-                               bars=bars, notice=say_note)
-            rows, lines, interrupted = _rows(prepared, jobs, executor, workers, rows_format,
-                                             fmt is not None and not output_path, quiet)
+            with Sweep(scene_path, varies, samples=samples, seed=seed,
+                       outputs=outputs.split(",") if outputs else None, options=options,
+                       bars=bars, series=plot_path is not None, jobs=jobs,
+                       scheduler=scheduler, notice=say_note) as sweeping:
+                lines, interrupted = _rows(sweeping, rows_format,
+                                           fmt is not None and not output_path, quiet)
         finally:
-            if client is not None:
-                client.close()
-            elif executor is not None:
-                stop_pool(executor)
             end_helper_processes()
         state["interrupted"] = interrupted
-        result = summarize(rows, prepared.plan.outputs,
-                           [key for key, _ in prepared.plan.value_keys])
+        prepared = sweeping.prepared
+        result = sweeping.summary(linear=linear and not interrupted)
         if plot_path:
-            from massprops.sweep.plots import plot_sweep  # deferred: matplotlib
-
-            plot_sweep(rows, prepared.plan.outputs, plot_path, force=force,
-                       protect=[scene_path, *([output_path] if output_path else [])])
-        if linear and not interrupted:
-            from massprops.sweep.linear import linearize  # deferred: only --linear
-
-            result["linear"] = linearize(prepared.plan)
+            sweeping.plot(plot_path, force=force, protect=protect)
         # the summary: after JSON rows, in their stream; on stderr beside CSV rows; as a table
         # when no format was asked for (the rows then only in --output)
         if output_path:
@@ -190,33 +170,30 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
     ctx.exit(code)
 
 
-def _rows(prepared: Any, jobs: int | None, executor: Any, workers: int | None,
-          rows_format: str, echo: bool, quiet: bool) -> tuple[list, list[str], bool]:
-    """Run the sweep: (its rows, their lines in ``rows_format``, whether Ctrl-C stopped it);
-    each line printed as its row comes where ``echo``."""
-    from massprops.sweep import run_sweep  # deferred: with the command's other imports
-    from massprops.sweep import table as csv_table
+def _rows(sweeping: Any, rows_format: str, echo: bool, quiet: bool) -> tuple[list[str], bool]:
+    """Run ``sweeping``: (its rows' lines in ``rows_format``, whether Ctrl-C stopped it); each
+    line printed as its row comes where ``echo``."""
+    from massprops.sweep import table as csv_table  # deferred: with the command's imports
 
-    rows: list = []
+    prepared = sweeping.prepared
     lines = [csv_table.csv_line(csv_table.header(prepared))] if rows_format == "csv" else []
     if echo and lines:
         click.echo(lines[0])
     counter = _Counter(prepared.plan.count, not quiet and sys.stderr.isatty())
-    sweeping = run_sweep(prepared, jobs=jobs, executor=executor, workers=workers)
+    rows = sweeping.rows()
     try:
-        for row in sweeping:
-            rows.append(row)
+        for row in rows:
             counter.step()
             lines.append(csv_table.csv_line(csv_table.cells(prepared, row))
                          if rows_format == "csv" else _json_line(row.as_dict()))
             if echo:
                 click.echo(lines[-1])
     except KeyboardInterrupt:
-        return rows, lines, True
+        return lines, True
     finally:
-        sweeping.close()
+        rows.close()
         counter.close()
-    return rows, lines, False
+    return lines, False
 
 
 def _json_line(obj: dict) -> str:

@@ -12,13 +12,16 @@ Modules, in the order a sweep uses them:
 - `run`: the plan checked and run once, then every sample, here or on a pool or a Dask
   cluster, rows in sample order;
 - `summary`: each output's spread, its uncertainty and its sensitivity to each value;
+- `linear`: derivatives from the engine itself (``--linear``); `plots`: bands over time;
+- `session`: `Sweep`, all of it as one object (plan, pool or cluster, rows, summary);
 - `table`: the rows as CSV.
 
-The library prints nothing; ``cli/sweep.py`` renders the rows and the summary.
+The library prints nothing; ``cli/sweep.py`` opens a `Sweep`, prints its rows, renders.
 """
 
 from massprops.sweep.run import Prepared, default_outputs, prepare, run_sweep
 from massprops.sweep.sample import Row
+from massprops.sweep.session import Sweep
 from massprops.sweep.summary import summarize
 
-__all__ = ["Prepared", "Row", "default_outputs", "prepare", "run_sweep", "summarize"]
+__all__ = ["Prepared", "Row", "Sweep", "default_outputs", "prepare", "run_sweep", "summarize"]
