@@ -1,5 +1,6 @@
 """The torques a motion takes (``massprops torques ROBOT MOTION.csv``): the notes' equation
-M ḣ + b = g read the other way, along a given motion of a robot description or a system scene.
+M ḣ + b = g read the other way, along a given motion of a robot description or a system scene,
+closed loops included.
 
 - `motion`: the motion from a CSV, rates and accelerations from a quintic spline, and the
   spline's own error;

@@ -2,8 +2,10 @@
 reaction, per sample, and per motor its peak, RMS, peak power and energy, against its limit.
 
 The robot is a system (`dynamics.any_scene.load`: a description or a `model:`/`bodies:` scene)
-with a spanning tree and no closed loop (loops are not followed yet). Its joints named in the
-motion follow it; every other moving joint is held at 0 by its motor (said in a note). At each
+with a fixed base. Its joints named in the motion follow it. On a tree every other moving joint
+is held at 0 by its motor (said in a note); with closed loops the others are passive, solved on
+the constraints from the driven ones (`_Follow`), and the motors act on the driven joints
+alone, the loops' forces minimum-norm where redundant (said in a note). At each
 sample the tree's RNEA gives motor = M u̇ + h(q, u) − τ (`systems.holding.motor_forces`: what
 the motors add to the joints' springs, dampers and drives), and the joints' reactions on their
 second bodies at their points, world frame, as `simulate` reports them (`systems.outputs
@@ -78,19 +80,47 @@ def torques_along(scene, motion: Motion, *, check: bool = False, margin: float =
     (exit 4) naming the joint, the time and the value where a peak exceeds its limit less
     ``margin`` (a fraction: 0.2 asks for 20 % headroom), after the results are made."""
     # deferred: the systems engine, loaded when a run starts
-    from massprops.dynamics.systems.assemble import tree_order
-    from massprops.dynamics.systems.holding import by_scene_joint, motor_forces
-    from massprops.dynamics.systems.outputs import reactions
     from massprops.dynamics.systems.run import prepare
-    from massprops.dynamics.systems.system import Solution
 
-    system, _, notes = prepare(scene)
-    if system.m:
-        raise SceneError(f"{scene.source}: closed loops or couplings: torques along a motion "
-                         "follow trees only so far")
+    system, y0, _ = prepare(scene)  # its notes are of the scene's start: not followed here
+    notes: list[str] = []
     if system.falling is not None:
         raise SceneError(f"{scene.source}: a floating base: its motion is not driven; give the "
                          "description a fixed base (a model: scene's base: fixed)")
+    driven = _driven(scene, system, motion, notes)
+    follow = _Follow(system, y0, driven, motion)
+    n = len(motion.t)
+    names = [sj.name for sj in scene.joints]
+    force = np.zeros((n, len(names), 3))
+    torque = np.zeros((n, len(names), 3))
+    motors, rates = [], []
+    bars = np.zeros(n)
+    for i in range(n):
+        y, motor, other = follow.sample(i, force[i], torque[i])
+        motors.append(follow.by_joint(y, motor))
+        rates.append(follow.by_joint(y, y[system.nq:]))
+        if other is not None:
+            bars[i] = float(np.max(np.abs(other - motor))) / RICHARDSON
+    if follow.redundant:
+        notes.append(f"{scene.source}: redundant constraints: the loops' forces are the "
+                     "minimum-norm set (the reactions they share are not determined)")
+    bars = _envelope(bars, SPLINE_ORDER)
+    rows = []
+    for i in range(n):
+        joints = {}
+        for k, name in enumerate(names):
+            if scene.joints[k].kind not in ONE_AXIS:
+                continue
+            tau = motors[i][k]
+            joints[name] = {"torque": tau.tolist(), "power": (tau * rates[i][k]).tolist(),
+                            "force": force[i, k].tolist(), "torque_world": torque[i, k].tolist()}
+        rows.append({"t": float(motion.t[i]), "joints": joints, "bar": bars[i]})
+    return _summarize(scene, rows, motion.t, check, margin, notes)
+
+
+def _driven(scene, system, motion: Motion, notes: list[str]) -> dict:
+    """Scene joint name -> its tree joint, for each joint the motion names (SceneError for a
+    name the scene has not, a joint of several axes, or a loop's cut joint)."""
     tree = system.tree
     index = {j.name: k for k, j in enumerate(scene.joints)}
     unknown = [n for n in motion.names if n not in index]
@@ -103,49 +133,124 @@ def torques_along(scene, motion: Motion, *, check: bool = False, margin: float =
         if sj.kind not in ONE_AXIS:
             raise SceneError(f"{motion.source}: {name} is a {sj.kind} joint; a motion drives "
                              "one-axis joints (revolute, prismatic) so far")
-        driven[name] = tree.joints[tree.of_scene[index[name]][1]]
-    moving = [j.name for j in scene.joints if j.kind in ONE_AXIS]
-    held = [n for n in moving if n not in driven]
-    if held:
-        notes.append(f"{motion.source}: not in the motion, held at 0 by their motors: "
-                     f"{', '.join(held)}")
-    n, nv = len(motion.t), system.nv
-    q = np.zeros((n, system.nq))
-    u, udot, udot_coarse = (np.zeros((n, nv)) for _ in range(3))
-    for name, j in driven.items():
-        sign = tree_order(j, np.ones(1))[0]
-        q[:, j.iq] = sign * motion.q[name]
-        u[:, j.iu] = sign * motion.rate[name]
-        udot[:, j.iu] = sign * motion.acc[name]
-        coarse = motion.coarse[name]
-        udot_coarse[:, j.iu] = sign * (motion.acc[name] if coarse is None else coarse)
-    names = [sj.name for sj in scene.joints]
-    force = np.zeros((n, len(names), 3))
-    torque = np.zeros((n, len(names), 3))
-    motors = []
-    bars = np.zeros(n)
-    for i in range(n):
-        t = float(motion.t[i])
-        motor, kin, _ = motor_forces(system, t, q[i], u[i], udot[i])
-        sol = Solution(udot[i], np.zeros(0), 0, kin, np.zeros((0, 6)), np.zeros((0, 6)))
-        reactions(system, t, np.concatenate([q[i], u[i]]), sol, force[i], torque[i], motor)
-        motors.append(by_scene_joint(system, q[i], motor))
-        if np.any(udot_coarse[i] != udot[i]):
-            other, _, _ = motor_forces(system, t, q[i], u[i], udot_coarse[i])
-            bars[i] = float(np.max(np.abs(other - motor))) / RICHARDSON
-    bars = _envelope(bars, SPLINE_ORDER)
-    rates = [by_scene_joint(system, q[i], u[i]) for i in range(n)]
-    rows = []
-    for i in range(n):
-        joints = {}
-        for k, name in enumerate(names):
-            if scene.joints[k].kind not in ONE_AXIS:
-                continue
-            tau = motors[i][k]
-            joints[name] = {"torque": tau.tolist(), "power": (tau * rates[i][k]).tolist(),
-                            "force": force[i, k].tolist(), "torque_world": torque[i, k].tolist()}
-        rows.append({"t": float(motion.t[i]), "joints": joints, "bar": bars[i]})
-    return _summarize(scene, rows, motion.t, check, margin, notes)
+        where, k = tree.of_scene[index[name]]
+        if where == "cut":
+            raise SceneError(f"{motion.source}: {name} closes a loop (the spanning tree cuts "
+                             "it): drive a joint of the tree instead, e.g. the crank")
+        driven[name] = tree.joints[k]
+    if not system.m:
+        held = [j.name for j in scene.joints if j.kind in ONE_AXIS and j.name not in driven]
+        if held:
+            notes.append(f"{motion.source}: not in the motion, held at 0 by their motors: "
+                         f"{', '.join(held)}")
+    return driven
+
+
+def _at(coarse: np.ndarray | None, fine: np.ndarray, i: int) -> float:
+    """The coarse spline's acceleration at sample i, the given one where there is no spline."""
+    return float(fine[i] if coarse is None else coarse[i])
+
+
+class _Follow:
+    """The system along the motion, sample by sample: the driven tree coordinates as given, the
+    loops' others solved on the constraints (positions by Newton from the sample before, rates
+    and accelerations from G u = 0 and G u̇ = −Φ̈₀), then the motors' forces (on the driven
+    joints only, where there are loops; on every joint of a tree, the undriven ones held) and
+    the loops' forces from M u̇ + h − τ = B τ_m + Gᵀλ, minimum-norm where redundant."""
+
+    def __init__(self, system, y0: np.ndarray, driven: dict, motion: Motion) -> None:
+        from massprops.dynamics.systems.assemble import tree_order  # deferred: as the caller
+
+        self.system, self.motion = system, motion
+        self.y = y0.copy()
+        self.index = np.array([j.iu for j in driven.values()], dtype=int)
+        self.q_index = np.array([j.iq for j in driven.values()], dtype=int)
+        self.sign = np.array([tree_order(j, np.ones(1))[0] for j in driven.values()])
+        self.names = list(driven)
+        self.redundant = False
+        nv = system.nv
+        self.dependent = np.array([k for k in range(nv) if k not in set(self.index)], dtype=int)
+
+    def _given(self, i: int, key: str) -> np.ndarray:
+        m = self.motion
+        table = {"q": m.q, "rate": m.rate, "acc": m.acc}.get(key)
+        if key == "coarse":
+            return self.sign * np.array([_at(m.coarse[n], m.acc[n], i) for n in self.names])
+        return self.sign * np.array([table[n][i] for n in self.names])  # type: ignore[index]
+
+    def sample(self, i: int, force: np.ndarray, torque: np.ndarray):
+        """(y, motor (nv,), the motor at the coarse spline's accelerations or None) at sample i;
+        the reactions into ``force``, ``torque``."""
+        from massprops.dynamics.systems import tree as tr  # deferred: as the caller
+        from massprops.dynamics.systems.holding import motor_forces
+        from massprops.dynamics.systems.loops import terms
+        from massprops.dynamics.systems.outputs import reactions
+        from massprops.dynamics.systems.system import Solution
+
+        system, tree = self.system, self.system.tree
+        nq, nv = system.nq, system.nv
+        t = float(self.motion.t[i])
+        y = self.y.copy() if system.m else np.zeros(nq + nv)
+        y[self.q_index] = self._given(i, "q")
+        y[nq + self.index] = self._given(i, "rate")
+        udot = np.zeros(nv)
+        udot[self.index] = self._given(i, "acc")
+        coarse = udot.copy()
+        coarse[self.index] = self._given(i, "coarse")
+        g = np.zeros((0, nv))
+        gdot = np.zeros(0)
+        rho = (np.zeros((0, 6)), np.zeros((0, 6)))
+        if system.m:
+            fixed = set(self.index.tolist())
+            y, _, _ = system.project(y, (fixed, fixed), iterations=50)
+            q, u = y[:nq], y[nq:]
+            kin0 = tr.kinematics(tree, q, u)
+            _, g, gdot, rho_b, rho_a = terms(tree.prims, kin0, tr.jacobians(tree, kin0), nv,
+                                             tree.size, tree.couplings, q)
+            rho = (rho_b, rho_a)
+            gd = g[:, self.dependent]
+            if np.linalg.matrix_rank(gd) < len(self.dependent):
+                raise SceneError(f"{self.motion.source}: the motion leaves the mechanism free "
+                                 "to move: name more of its joints (a motion drives every "
+                                 "degree of freedom)")
+            for acc in (udot, coarse):
+                acc[self.dependent] = np.linalg.lstsq(
+                    gd, -gdot - g[:, self.index] @ acc[self.index], rcond=None)[0]
+        q, u = y[:nq], y[nq:]
+        motor, lam = self._motors(t, q, u, udot, g)
+        other = None
+        if np.any(coarse != udot):
+            other, _ = self._motors(t, q, u, coarse, g)
+        _, kin, _ = motor_forces(system, t, q, u, udot)
+        sol = Solution(udot, lam, len(lam), kin, *rho)
+        reactions(system, t, y, sol, force, torque, motor)
+        self.y = y
+        return y, motor, other
+
+    def _motors(self, t: float, q, u, udot, g) -> tuple[np.ndarray, np.ndarray]:
+        """(motor (nv,), λ (m,)): M u̇ + h − τ = motor + Gᵀλ, the motors on the driven
+        coordinates only where there are loops (else on every one)."""
+        from massprops.dynamics.systems.holding import motor_forces  # deferred: as the caller
+
+        needed, _, _ = motor_forces(self.system, t, q, u, udot)
+        if not len(g):
+            return needed, np.zeros(0)
+        nv = self.system.nv
+        select = np.zeros((nv, len(self.index)))
+        select[self.index, np.arange(len(self.index))] = 1.0
+        a = np.hstack([select, g.T])
+        x, _, rank, _ = np.linalg.lstsq(a, needed, rcond=None)
+        if rank < a.shape[1]:
+            self.redundant = True
+        motor = np.zeros(nv)
+        motor[self.index] = x[:len(self.index)]
+        return motor, x[len(self.index):]
+
+    def by_joint(self, y: np.ndarray, values: np.ndarray) -> list[np.ndarray]:
+        """Tree values (nv,) per scene joint, in the scene's signs (`holding.by_scene_joint`)."""
+        from massprops.dynamics.systems.holding import by_scene_joint  # deferred: as caller
+
+        return by_scene_joint(self.system, y[:self.system.nq], values)
 
 
 def _envelope(bars: np.ndarray, half: int) -> np.ndarray:
