@@ -199,3 +199,48 @@ def test_a_four_bars_crank_drive_comes_back_through_its_loop(tmp_path):
         for jj, name in enumerate("ABCD"):
             np.testing.assert_allclose(found.rows[k]["joints"][name]["force"], s.force[k, jj],
                                        atol=2e-3)
+
+
+@pytest.mark.timeout(120)
+def test_computed_inertials_ignore_a_wrong_stated_one_and_bars_show_the_spread(run, tmp_path):
+    """The test arm's stated inertials are its geometry's (`model --check` passes); with the
+    upper arm's stated inertia replaced by a placeholder (its centre of mass at the link origin,
+    diag(0.01)), `--inertials computed` gives the original torques back (the stated mass with
+    the geometry's distribution), and `--bars` widens each sample's bar to the spread between
+    the placeholder's torques and the geometry's."""
+    import shutil
+
+    folder = tmp_path / "arm_description"
+    shutil.copytree(ROOT / "tests" / "robots" / "arm_description", folder)
+    urdf = folder / "urdf" / "arm.urdf"
+    text = urdf.read_text()
+    stated = ('<origin xyz="0.07 0.01 0.23" rpy="0 0 0"/>\n      <mass value="2.5"/>\n      '
+              '<inertia ixx="0.0441667" ixy="0.003" ixz="-0.006" iyy="0.0421667" iyz="0.012" '
+              'izz="0.0141667"/>')
+    placeholder = ('<origin xyz="0 0 0" rpy="0 0 0"/>\n      <mass value="2.5"/>\n      '
+                   '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/>')
+    assert text.count(stated) == 1
+    t = np.linspace(0.0, 1.0, 101)
+    motion = tmp_path / "arm.csv"
+    motion.write_text(motion_text(t, {"shoulder": 0.4 * np.sin(3 * t),
+                                      "elbow": 0.3 + 0.5 * np.sin(2 * t),
+                                      "wrist_joint": np.sin(t)}))
+
+    def torques(*extra):
+        res = run("torques", urdf, motion, "--json", *extra)
+        assert res.exit_code == 0, res.stderr
+        return json_lines(res.stdout)[:-1]
+
+    def shoulder(rows):
+        return np.array([r["joints"]["shoulder"]["torque"][0] for r in rows])
+
+    original = shoulder(torques())
+    urdf.write_text(text.replace(stated, placeholder))
+    wrong, from_geometry = torques(), torques("--inertials", "computed")
+    # the file states the geometry's inertials rounded to 6 digits (0.0441667): ~1e-7 N·m apart
+    np.testing.assert_allclose(shoulder(from_geometry), original, rtol=0, atol=1e-6)
+    spread = np.abs(shoulder(wrong) - shoulder(from_geometry))
+    assert spread.max() > 0.01  # the upper arm's misplaced mass is felt at the shoulder
+    barred = torques("--bars")
+    assert all(r["bar"] >= s for r, s in zip(barred, spread))
+    np.testing.assert_array_equal(shoulder(barred), shoulder(wrong))  # the stated ones reported

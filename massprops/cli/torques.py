@@ -38,11 +38,17 @@ def _margin(ctx: click.Context, param: click.Parameter, value: str | None) -> fl
 @click.option("--margin", callback=_margin, default=None, metavar="P",
               help="With --check: the headroom asked for, e.g. 20% (the peak must stay below "
                    "80 % of the limit).")
+@click.option("--inertials", type=click.Choice(["stated", "computed"]), default=None,
+              help="A description's inertials: as stated (default) or computed from its "
+                   "geometry, as `massprops model` computes them.")
+@click.option("--bars", is_flag=True,
+              help="Widen each sample's bar by the spread between the stated and the computed "
+                   "inertials' torques (a description's own disagreement).")
 @robot_file_options
 @click.pass_context
 def torques(ctx: click.Context, robot_path: str, motion_path: str | None, as_json: bool,
-            out_format: str | None, check: bool, margin: float, package_paths: tuple[str, ...],
-            xacro_args: dict[str, str]) -> None:
+            out_format: str | None, check: bool, margin: float, inertials: str | None,
+            bars: bool, package_paths: tuple[str, ...], xacro_args: dict[str, str]) -> None:
     """Inverse dynamics along a motion: each motor's torque (or force) and power, each joint's
     reaction, per sample of MOTION.csv (t and one column per joint), for a robot description or
     a system scene; a summary per motor (peak, RMS, peak power, energy, limit)."""
@@ -55,19 +61,26 @@ def torques(ctx: click.Context, robot_path: str, motion_path: str | None, as_jso
 
     def run() -> None:
         # deferred: each command imports only what it runs (start-up of the others)
-        from massprops.dynamics import any_scene
-        from massprops.torques import raise_if_failed, read_motion, torques_along
+        from massprops.torques import (
+            load_robot,
+            raise_if_failed,
+            read_motion,
+            torques_along,
+            with_inertials_spread,
+        )
 
-        scene = any_scene.load(robot_path, 0.0 if robot_path.endswith(
-            (".urdf", ".sdf", ".xml", ".xacro")) else None, package_paths=package_paths,
-            xacro_args=xacro_args)
-        if not any_scene.is_system(scene):
-            raise click.UsageError(f"{robot_path}: one body has no motors; torques takes a "
-                                   "robot description or a system scene")
-        for source, w in any_scene.warnings(scene, robot_path):
-            say_warning(source, w)
+        def robot(which: str | None) -> Any:
+            return load_robot(robot_path, inertials=which, package_paths=package_paths,
+                              xacro_args=xacro_args)
+
+        scene = robot(inertials)
+        for w in scene.warnings:
+            say_warning(robot_path, w)
         motion = read_motion(motion_path)
         result = torques_along(scene, motion, check=check, margin=margin)
+        if bars:
+            other = "stated" if inertials == "computed" else "computed"
+            result = with_inertials_spread(result, torques_along(robot(other), motion))
         say_notes(result.notes)
         if fmt == "json":
             for row in result.rows:

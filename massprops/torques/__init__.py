@@ -10,7 +10,14 @@ closed loops included.
 The library prints nothing; ``cli/torques.py`` renders.
 """
 
-from massprops.torques.along import Torques, raise_if_failed, torques_along
+from massprops.torques.along import (
+    Torques,
+    load_robot,
+    raise_if_failed,
+    torques_along,
+    with_inertials_spread,
+)
 from massprops.torques.motion import Motion, read_motion
 
-__all__ = ["Motion", "Torques", "raise_if_failed", "read_motion", "torques_along"]
+__all__ = ["Motion", "Torques", "load_robot", "raise_if_failed", "read_motion", "torques_along",
+           "with_inertials_spread"]

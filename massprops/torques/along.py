@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from massprops.errors import CheckFailedError, SceneError
+from massprops.errors import CheckFailedError, SceneError, UsageError, setting_ref
 from massprops.torques.motion import RICHARDSON, SPLINE_ORDER, Motion, trapezoid
 
 ONE_AXIS = ("revolute", "prismatic")
@@ -72,6 +72,42 @@ def _effort_limits(scene) -> dict[str, float]:
         if value > 0 and math.isfinite(value):
             out[j.name] = value
     return out
+
+
+def load_robot(path, *, inertials: str | None = None, package_paths=(), xacro_args=None):
+    """The system whose motors are asked about: a robot description at its zero pose with its
+    ``inertials`` ("stated", the default, or "computed" from its geometry), or a system scene
+    (which names its own: a ``model:`` scene's ``inertials:``). SceneError, RobotModelError,
+    UsageError (``inertials`` with a scene file; a one-body scene, which has no motors)."""
+    # deferred: the scene kinds, decided where they are read
+    from massprops.dynamics import any_scene
+    from massprops.dynamics.systems.robot_scene import description_scene, is_description
+
+    if is_description(path):
+        return description_scene(path, duration=0.0, package_paths=package_paths,
+                                 xacro_args=xacro_args, inertials=inertials or "stated")
+    if inertials is not None:
+        raise UsageError(f"{path}: {setting_ref('inertials')} applies to a robot description "
+                         "given directly; a model: scene names its own (inertials:)")
+    scene = any_scene.load(path, package_paths=package_paths, xacro_args=xacro_args)
+    if not any_scene.is_system(scene):
+        raise UsageError(f"{path}: one body has no motors; torques takes a robot description "
+                         "or a system scene")
+    return scene
+
+
+def with_inertials_spread(chosen: Torques, other: Torques) -> Torques:
+    """``chosen`` with each sample's bar widened by the largest difference of a motor's force
+    from ``other``'s (the same motion with the other inertials: the stated ones against those
+    of the geometry), the spread the description's own disagreement leaves."""
+    for row, alt in zip(chosen.rows, other.rows):
+        spread = max((abs(a - b) for name, j in row["joints"].items()
+                      for a, b in zip(j["torque"], alt["joints"][name]["torque"])), default=0.0)
+        row["bar"] = max(row["bar"], spread)
+    widest = max((r["bar"] for r in chosen.rows), default=0.0)
+    chosen.notes.append(f"each sample's bar holds the spread between the stated and the "
+                        f"computed inertials' torques too (up to {widest:.3g} N·m or N)")
+    return chosen
 
 
 def torques_along(scene, motion: Motion, *, check: bool = False, margin: float = 0.0

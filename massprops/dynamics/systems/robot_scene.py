@@ -183,12 +183,15 @@ def _xacro_args(field: Field | None) -> dict[str, str]:
 
 def description_scene(path: str | os.PathLike, *, duration: float = 1.0,
                       package_paths: Sequence[str | os.PathLike] = (),
-                      xacro_args: Mapping[str, str] | None = None) -> SystemScene:
-    """``massprops simulate ROBOT``: the description with stated inertials, its own base, the
+                      xacro_args: Mapping[str, str] | None = None,
+                      inertials: str = "stated") -> SystemScene:
+    """``massprops simulate ROBOT``: the description with its stated inertials (``inertials``
+    "computed": from the geometry, as ``massprops model`` computes them), its own base, the
     standard gravity (or MJCF's ``<option gravity>``), from the zero pose at rest, for
     ``duration`` s (0: the start pose only); ``package_paths`` and ``xacro_args`` as for
     ``massprops model``."""
-    desc = describe(path, package_paths=package_paths, xacro_args=xacro_args)
+    desc = describe(path, inertials=inertials, package_paths=package_paths,
+                    xacro_args=xacro_args)
     gravity = np.array(STANDARD_GRAVITY) if desc.gravity is None else desc.gravity
     return _scene(desc, gravity, (), (), SystemInitial(), TimeSettings(float(duration)),
                   OutputSettings(), os.fspath(path), {})
