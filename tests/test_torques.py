@@ -144,6 +144,25 @@ def test_csv_rows(run, tmp_path):
     assert json.loads(res.stderr.strip().splitlines()[-1])["samples"] == len(T)
 
 
+def round_trip(tmp_path, sample_name: str, joint_end: str, drive: float, time_line: str,
+               joints: tuple[str, ...]):
+    """The sample run by simulate with ``drive`` (N·m) on the first joint ending in
+    ``joint_end``, for 2 s at rtol 1e-12 sampled every 4 ms; the named joints' coordinates given
+    to `torques` on the sample without the drive: (its result, the run's samples)."""
+    sample = (ROOT / "sample_scenes" / sample_name).read_text()
+    driven = sample.replace(joint_end, joint_end[:-1] + f", torque: {drive}}}", 1)
+    assert driven != sample and time_line in driven
+    driven = driven.replace(time_line, "time: {duration: 2.0, rtol: 1e-12}")
+    (tmp_path / "driven.yaml").write_text(driven)
+    (tmp_path / "free.yaml").write_text(sample)
+    s = any_scene.simulate(any_scene.load(tmp_path / "driven.yaml"), every=0.004).samples
+    names = [j.name for j in any_scene.load(tmp_path / "free.yaml").joints]
+    columns = {n: s.coordinates[names.index(n)][:, 0] for n in joints}
+    (tmp_path / "made.csv").write_text(motion_text(s.t, columns))
+    return torques_along(any_scene.load(tmp_path / "free.yaml"),
+                         read_motion(tmp_path / "made.csv")), s
+
+
 @pytest.mark.timeout(120)
 def test_a_motion_simulate_made_under_a_drive_gives_that_drive_back(tmp_path):
     """The double pendulum driven at its shoulder by 0.5 N·m runs under simulate; the same
@@ -151,18 +170,8 @@ def test_a_motion_simulate_made_under_a_drive_gives_that_drive_back(tmp_path):
     the elbow: to within the spline's bar plus the data's own error, which the bar does not hold:
     the run's positions (dense output at rtol 1e-12, ~1e-11 rad) twice differentiated over
     h = 4 ms reach the accelerations as ~2e-11 / h² ≈ 1e-6 rad/s², the torques as ~1e-6 N·m."""
-    sample = (ROOT / "sample_scenes" / "double_pendulum.yaml").read_text()
-    driven = sample.replace("axis: [0, 1, 0]}", "axis: [0, 1, 0], torque: 0.5}", 1)
-    assert driven != sample
-    driven = driven.replace("time: {duration: 10.0}", "time: {duration: 2.0, rtol: 1e-12}")
-    (tmp_path / "driven.yaml").write_text(driven)
-    (tmp_path / "free.yaml").write_text(sample)
-    run = any_scene.simulate(any_scene.load(tmp_path / "driven.yaml"), every=0.004)
-    s = run.samples
-    columns = {"shoulder": s.coordinates[0][:, 0], "elbow": s.coordinates[1][:, 0]}
-    (tmp_path / "made.csv").write_text(motion_text(s.t, columns))
-    found = torques_along(any_scene.load(tmp_path / "free.yaml"),
-                          read_motion(tmp_path / "made.csv"))
+    found, _ = round_trip(tmp_path, "double_pendulum.yaml", "axis: [0, 1, 0]}", 0.5,
+                          "time: {duration: 10.0}", ("shoulder", "elbow"))
     for row in found.rows[10:-10]:  # the spline's not-a-knot ends err more
         bar = row["bar"]
         assert row["joints"]["shoulder"]["torque"][0] == pytest.approx(0.5, abs=bar + 1e-5)
@@ -175,18 +184,8 @@ def test_a_four_bars_crank_drive_comes_back_through_its_loop(tmp_path):
     """The four-bar sample driven at its crank by 3 N·m under simulate; its crank's sampled
     motion given to `torques` on the undriven four-bar: the crank needs 3 N·m (the coupler and
     rocker solved on the loop), the other joints none (they have no motors)."""
-    sample = (ROOT / "sample_scenes" / "four_bar.yaml").read_text()
-    driven = sample.replace("point: [0, 0, 0], axis: [0, 1, 0]}",
-                            "point: [0, 0, 0], axis: [0, 1, 0], torque: 3.0}", 1)
-    assert driven != sample
-    driven = driven.replace("time: {duration: 5.0}", "time: {duration: 2.0, rtol: 1e-12}")
-    (tmp_path / "driven.yaml").write_text(driven)
-    (tmp_path / "free.yaml").write_text(sample)
-    run = any_scene.simulate(any_scene.load(tmp_path / "driven.yaml"), every=0.004)
-    s = run.samples
-    (tmp_path / "crank.csv").write_text(motion_text(s.t, {"A": s.coordinates[0][:, 0]}))
-    found = torques_along(any_scene.load(tmp_path / "free.yaml"),
-                          read_motion(tmp_path / "crank.csv"))
+    found, s = round_trip(tmp_path, "four_bar.yaml", "point: [0, 0, 0], axis: [0, 1, 0]}",
+                          3.0, "time: {duration: 5.0}", ("A",))
     for row in found.rows[10:-10]:
         bar = row["bar"]
         assert row["joints"]["A"]["torque"][0] == pytest.approx(3.0, abs=bar + 1e-4)
