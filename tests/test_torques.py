@@ -243,3 +243,15 @@ def test_computed_inertials_ignore_a_wrong_stated_one_and_bars_show_the_spread(r
     barred = torques("--bars")
     assert all(r["bar"] >= s for r, s in zip(barred, spread))
     np.testing.assert_array_equal(shoulder(barred), shoulder(wrong))  # the stated ones reported
+
+
+def test_a_motion_the_loop_cannot_follow_is_one_line_exit_1(run, tmp_path):
+    """Crank and coupler both driven: the four-bar has one degree of freedom, so the loop
+    cannot close once the two disagree (the contract: exit 1, one line)."""
+    t = np.linspace(0.0, 1.0, 50)
+    motion = tmp_path / "both.csv"
+    motion.write_text(motion_text(t, {"A": 0 * t, "B": 6 * t}))
+    res = run("torques", ROOT / "sample_scenes" / "four_bar.yaml", motion)
+    assert res.exit_code == 1
+    errors = [line for line in res.stderr.splitlines() if line.startswith("massprops: error")]
+    assert len(errors) == 1 and "the loop cannot close" in errors[0] and "t = " in errors[0]

@@ -237,8 +237,15 @@ class _Follow:
         gdot = np.zeros(0)
         rho = (np.zeros((0, 6)), np.zeros((0, 6)))
         if system.m:
+            from massprops.dynamics.systems.system import UnclosedLoop  # deferred: as above
+
             fixed = set(self.index.tolist())
-            y, _, _ = system.project(y, (fixed, fixed), iterations=50)
+            try:
+                y, _, _ = system.project(y, (fixed, fixed), iterations=50)
+            except UnclosedLoop as exc:  # the motion's fault, not the run's: exit 1
+                raise SceneError(f"{self.motion.source}: at t = {t:.6g} s the loop cannot "
+                                 f"close with the given coordinates (it misses by "
+                                 f"{exc.residual:.3g} m)") from exc
             q, u = y[:nq], y[nq:]
             kin0 = tr.kinematics(tree, q, u)
             _, g, gdot, rho_b, rho_a = terms(tree.prims, kin0, tr.jacobians(tree, kin0), nv,
