@@ -255,3 +255,19 @@ def test_a_motion_the_loop_cannot_follow_is_one_line_exit_1(run, tmp_path):
     assert res.exit_code == 1
     errors = [line for line in res.stderr.splitlines() if line.startswith("massprops: error")]
     assert len(errors) == 1 and "the loop cannot close" in errors[0] and "t = " in errors[0]
+
+
+def test_check_names_a_joint_that_moves_faster_than_its_velocity_limit(run, tmp_path):
+    urdf = ra.urdf()
+    shoulder = urdf[urdf.find('<joint name="shoulder"'):]
+    shoulder = shoulder[:shoulder.find("</joint>")]
+    assert 'velocity="5"' in shoulder  # the motion's shoulder turns at up to 1 rad/s
+    path = tmp_path / "slow.urdf"
+    path.write_text(urdf.replace(shoulder, shoulder.replace('velocity="5"', 'velocity="0.8"')))
+    res = run("torques", path, motion_file(tmp_path, exact=True), "--check", "--json")
+    assert res.exit_code == 4
+    summary = json_lines(res.stdout)[-1]["summary"]["shoulder"]
+    assert summary["rate_limit"] == [0.8]
+    assert summary["peak_rate"][0] == pytest.approx(0.5 * 2.0)  # amp × rate of its sine
+    assert "joint shoulder moves at 1 at t = 0 s, beyond its velocity limit 0.8" in res.stderr
+    assert "joint limits are not enforced" not in res.stderr  # nothing is simulated here

@@ -33,8 +33,9 @@ def _margin(ctx: click.Context, param: click.Parameter, value: str | None) -> fl
 @click.option("--format", "out_format", type=click.Choice(["csv", "json"]), default=None,
               help="Each sample's torques and powers as CSV (summary on stderr), or JSON lines.")
 @click.option("--check", is_flag=True,
-              help="Exit 4 when a motor's peak exceeds its effort limit (URDF <limit effort>, "
-                   "SDF <effort>), naming the joint, the time and the margin.")
+              help="Exit 4 when a motor's peak exceeds its effort limit or a joint's rate its "
+                   "velocity limit (URDF <limit effort velocity>, SDF <effort> <velocity>), "
+                   "naming the joint, the time and the margin.")
 @click.option("--margin", callback=_margin, default=None, metavar="P",
               help="With --check: the headroom asked for, e.g. 20% (the peak must stay below "
                    "80 % of the limit).")
@@ -66,6 +67,7 @@ def torques(ctx: click.Context, robot_path: str, motion_path: str | None, as_jso
             raise_if_failed,
             read_motion,
             torques_along,
+            warnings,
             with_inertials_spread,
         )
 
@@ -74,7 +76,7 @@ def torques(ctx: click.Context, robot_path: str, motion_path: str | None, as_jso
                               xacro_args=xacro_args)
 
         scene = robot(inertials)
-        for w in scene.warnings:
+        for w in warnings(scene):
             say_warning(robot_path, w)
         motion = read_motion(motion_path)
         result = torques_along(scene, motion, check=check, margin=margin)

@@ -15,9 +15,10 @@ from massprops.torques.along import (
     load_robot,
     raise_if_failed,
     torques_along,
+    warnings,
     with_inertials_spread,
 )
 from massprops.torques.motion import Motion, read_motion
 
 __all__ = ["Motion", "Torques", "load_robot", "raise_if_failed", "read_motion", "torques_along",
-           "with_inertials_spread"]
+           "warnings", "with_inertials_spread"]

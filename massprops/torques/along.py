@@ -14,9 +14,9 @@ motor's force when the motion's accelerations are those of the spline through ev
 sample, divided by 15 (`motion`), the largest within 5 samples of it (the spline's span): the
 sampling's error on the torques.
 
-Limits: a URDF joint's ``<limit effort>``, an SDF joint's ``<axis><limit><effort>`` (N·m or N);
-none from MJCF yet. A limit of 0 or below is no limit (URDF's default when the attribute is
-missing is 0, "none stated").
+Limits: a URDF joint's ``<limit effort velocity>``, an SDF joint's ``<axis><limit><effort>`` and
+``<velocity>`` (N·m or N; rad/s or m/s); none from MJCF yet. A limit of 0 or below is no limit
+(URDF's default when the attribute is missing is 0, "none stated").
 """
 
 from __future__ import annotations
@@ -44,34 +44,43 @@ class Torques:
     failed: list[str] = field(default_factory=list)
 
 
-def _effort_limits(scene) -> dict[str, float]:
-    """Joint name -> effort limit (N·m or N) stated in the scene's description, where any."""
+def _limits(scene) -> dict[str, tuple[float | None, float | None]]:
+    """Joint name -> (effort N·m or N, velocity rad/s or m/s) limits stated in the scene's
+    description, None where a value is not stated (or is 0 or less: URDF's "none")."""
     if getattr(scene, "robot", None) is None:
         return {}
     # deferred: the description read again only for its limits
     from massprops.robot.analyze import load_model
     from massprops.robot.mechanism import read_mechanism
 
-    out: dict[str, float] = {}
+    out: dict[str, tuple[float | None, float | None]] = {}
     for j in read_mechanism(load_model(scene.robot)).joints:
         node = j.node
-        limit = None
-        if node is not None:
-            found = node.find("limit") if node.tag == "joint" else None
-            if found is not None and "effort" in found.attrs:  # URDF
-                limit = found.attrs["effort"]
-            axis = node.find("axis")
-            sdf = axis.find("limit") if axis is not None else None
-            effort = sdf.find("effort") if sdf is not None else None
-            if effort is not None:  # SDF
-                limit = effort.text
-        try:
-            value = float(limit) if limit is not None else 0.0
-        except ValueError:
-            value = 0.0
-        if value > 0 and math.isfinite(value):
-            out[j.name] = value
+        if node is None:
+            continue
+        urdf = node.find("limit") if node.tag == "joint" else None
+        axis = node.find("axis")
+        sdf = axis.find("limit") if axis is not None else None
+        stated = []
+        for key in ("effort", "velocity"):
+            text = None
+            if urdf is not None and key in urdf.attrs:
+                text = urdf.attrs[key]
+            element = sdf.find(key) if sdf is not None else None
+            if element is not None:
+                text = element.text
+            stated.append(_positive(text))
+        if any(v is not None for v in stated):
+            out[j.name] = (stated[0], stated[1])
     return out
+
+
+def _positive(text: str | None) -> float | None:
+    try:
+        value = float(text) if text is not None else 0.0
+    except ValueError:
+        return None
+    return value if value > 0 and math.isfinite(value) else None
 
 
 def load_robot(path, *, inertials: str | None = None, package_paths=(), xacro_args=None):
@@ -94,6 +103,14 @@ def load_robot(path, *, inertials: str | None = None, package_paths=(), xacro_ar
         raise UsageError(f"{path}: one body has no motors; torques takes a robot description "
                          "or a system scene")
     return scene
+
+
+def warnings(scene) -> list[str]:
+    """What reading the robot said, less what only a simulation leaves out (limits, contacts):
+    torques simulate nothing."""
+    from massprops.dynamics.systems.description import SIMULATION_SCOPE  # deferred: as above
+
+    return [w for w in scene.warnings if not w.startswith(SIMULATION_SCOPE)]
 
 
 def with_inertials_spread(chosen: Torques, other: Torques) -> Torques:
@@ -151,7 +168,9 @@ def torques_along(scene, motion: Motion, *, check: bool = False, margin: float =
             joints[name] = {"torque": tau.tolist(), "power": (tau * rates[i][k]).tolist(),
                             "force": force[i, k].tolist(), "torque_world": torque[i, k].tolist()}
         rows.append({"t": float(motion.t[i]), "joints": joints, "bar": bars[i]})
-    return _summarize(scene, rows, motion.t, check, margin, notes)
+    speeds = {name: np.array([abs(float(rates[i][k][0])) for i in range(n)])
+              for k, name in enumerate(names) if scene.joints[k].kind in ONE_AXIS}
+    return _summarize(scene, rows, speeds, motion.t, check, margin, notes)
 
 
 def _driven(scene, system, motion: Motion, notes: list[str]) -> dict:
@@ -307,9 +326,12 @@ def _envelope(bars: np.ndarray, half: int) -> np.ndarray:
     return windows.max(axis=1)
 
 
-def _summarize(scene, rows: list[dict], t: np.ndarray, check: bool, margin: float,
-               notes: list[str]) -> Torques:
-    limits = _effort_limits(scene)
+def _summarize(scene, rows: list[dict], speeds: dict[str, np.ndarray], t: np.ndarray,
+               check: bool, margin: float, notes: list[str]) -> Torques:
+    """The summary per motor (the contract's keys, and ``peak_rate``, ``rate_limit``: the
+    fastest |q̇| and the velocity limit) and, with ``check``, one line per limit passed (an
+    effort limit by the peak, a velocity limit by the fastest rate, each less ``margin``)."""
+    limits = _limits(scene)
     summary: dict[str, Any] = {}
     failed = []
     for name in rows[0]["joints"] if rows else ():
@@ -317,19 +339,28 @@ def _summarize(scene, rows: list[dict], t: np.ndarray, check: bool, margin: floa
         power = np.array([r["joints"][name]["power"][0] for r in rows])
         peak_at = int(np.argmax(np.abs(tau)))
         peak = float(abs(tau[peak_at]))
+        fast_at = int(np.argmax(speeds[name]))
+        fast = float(speeds[name][fast_at])
         span = float(t[-1] - t[0])
         rms = math.sqrt(trapezoid(tau ** 2, t) / span) if span > 0 else peak
-        limit = limits.get(name)
+        limit, rate_limit = limits.get(name, (None, None))
         summary[name] = {"peak": [peak], "peak_t": [float(t[peak_at])], "rms": [rms],
                          "peak_power": [float(np.max(np.abs(power)))],
                          "energy": [trapezoid(power, t)],
                          "limit": [limit], "margin": [None if limit is None
-                                                      else 1.0 - peak / limit]}
-        if check and limit is not None and peak > limit * (1.0 - margin):
+                                                      else 1.0 - peak / limit],
+                         "peak_rate": [fast], "rate_limit": [rate_limit]}
+        if not check:
+            continue
+        headroom = f" less {margin:.0%} headroom" if margin else ""
+        if limit is not None and peak > limit * (1.0 - margin):
             failed.append(f"{scene.source}: joint {name} needs {peak:.6g} at t = "
-                          f"{t[peak_at]:.6g} s, beyond its limit {limit:.6g}"
-                          + (f" less {margin:.0%} headroom" if margin else "")
-                          + f" (margin {1.0 - peak / limit:+.1%})")
+                          f"{t[peak_at]:.6g} s, beyond its limit {limit:.6g}{headroom} "
+                          f"(margin {1.0 - peak / limit:+.1%})")
+        if rate_limit is not None and fast > rate_limit * (1.0 - margin):
+            failed.append(f"{scene.source}: joint {name} moves at {fast:.6g} at t = "
+                          f"{t[fast_at]:.6g} s, beyond its velocity limit {rate_limit:.6g}"
+                          f"{headroom} (margin {1.0 - fast / rate_limit:+.1%})")
     verdict = "not checked" if not check else "fail" if failed else "ok"
     return Torques(rows, {"summary": summary, "samples": len(rows), "check": verdict}, notes,
                    failed)

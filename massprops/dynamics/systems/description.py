@@ -106,14 +106,20 @@ def describe(path: str | os.PathLike, *, inertials: str = "stated", base: str | 
     return desc
 
 
+SIMULATION_SCOPE = ("joint limits are not enforced", "contacts, actuators and friction are "
+                    "out of scope")
+"""How the warnings about what a simulation leaves out begin: a command that simulates nothing
+(``torques``) leaves them unsaid."""
+
+
 def _said(mech: Mechanism, path: Path) -> list[str]:
     out = list(mech.remarks)
     if any(j.limits for j in mech.joints):
         named = [j.name for j in mech.joints if j.limits]
-        out.append(f"joint limits are not enforced (the systems engine has no limits "
-                   f"or contacts): {', '.join(named[:4])}{' ...' if len(named) > 4 else ''}")
+        out.append(f"{SIMULATION_SCOPE[0]} (the systems engine has no limits or contacts): "
+                   f"{', '.join(named[:4])}{' ...' if len(named) > 4 else ''}")
     extra = "".join(f", {n}" for n in mech.notes)
-    out.append(f"contacts, actuators and friction are out of scope and not simulated"
+    out.append(f"{SIMULATION_SCOPE[1]} and not simulated"
                f"{' (the description has ' + extra[2:] + ')' if extra else ''}")
     return out
 
