@@ -44,17 +44,26 @@ class Torques:
     failed: list[str] = field(default_factory=list)
 
 
-def _limits(scene) -> dict[str, tuple[float | None, float | None]]:
+def _limits(scene, notes: list[str]) -> dict[str, tuple[float | None, float | None]]:
     """Joint name -> (effort N·m or N, velocity rad/s or m/s) limits stated in the scene's
-    description, None where a value is not stated (or is 0 or less: URDF's "none")."""
+    description, None where a value is not stated (or is 0 or less: URDF's "none"). The
+    description is read again for them; where that fails (a .xacro that needs its arguments)
+    a note says so and no limit is known."""
     if getattr(scene, "robot", None) is None:
         return {}
     # deferred: the description read again only for its limits
+    from massprops.errors import MassPropsError
     from massprops.robot.analyze import load_model
     from massprops.robot.mechanism import read_mechanism
 
+    try:
+        joints = read_mechanism(load_model(scene.robot)).joints
+    except MassPropsError as exc:
+        notes.append(f"{scene.robot}: its limits could not be read again ({exc}); none "
+                     "is checked")
+        return {}
     out: dict[str, tuple[float | None, float | None]] = {}
-    for j in read_mechanism(load_model(scene.robot)).joints:
+    for j in joints:
         node = j.node
         if node is None:
             continue
@@ -331,7 +340,7 @@ def _summarize(scene, rows: list[dict], speeds: dict[str, np.ndarray], t: np.nda
     """The summary per motor (the contract's keys, and ``peak_rate``, ``rate_limit``: the
     fastest |q̇| and the velocity limit) and, with ``check``, one line per limit passed (an
     effort limit by the peak, a velocity limit by the fastest rate, each less ``margin``)."""
-    limits = _limits(scene)
+    limits = _limits(scene, notes)
     summary: dict[str, Any] = {}
     failed = []
     for name in rows[0]["joints"] if rows else ():
