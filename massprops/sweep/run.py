@@ -37,9 +37,11 @@ if TYPE_CHECKING:  # concurrent.futures (and logging) load only when a pool is u
 
 SWEEP_PRELOAD = ("massprops.batch.worker", "massprops.sweep.sample",
                  "massprops.dynamics.systems.robot_scene", "massprops.dynamics.systems.run",
-                 "massprops.dynamics.simulate", "massprops.dynamics.compiled.systems_kernel")
+                 "massprops.dynamics.simulate", "massprops.dynamics.compiled.systems_kernel",
+                 "massprops.sweep.forkwarm")
 """What a local pool's fork server imports before its workers fork: the sweep, both kinds of
-scene and run, and numba with the kernels' dispatchers (~0.5 s a worker would each pay)."""
+scene and run, numba with the kernels' dispatchers, and numba's target initialised
+(`forkwarm`): ~0.8 s a worker would each pay, ~0.1 s left (the kernels' loads)."""
 
 SERIES_POINTS = 200
 """Sample intervals of a run whose outputs are kept over time (``--plot``)."""
