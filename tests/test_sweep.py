@@ -292,3 +292,37 @@ def test_plot_writes_a_png_and_never_over_the_scene(run, tmp_path):
     again = run("sweep", scene, "--vary", "bodies.rod.position[2]=uniform:-0.5:-0.2",
                 "--samples", "5", "--plot", png)
     assert again.exit_code == 1 and "exists" in again.stderr  # checked before any run
+
+
+@pytest.mark.timeout(90)
+def test_ctrl_c_keeps_the_rows_done_and_leaves_no_process(tmp_path):
+    """A terminal's Ctrl-C mid-sweep (the whole process group): exit 130, the rows done are
+    printed in sample order with their summary, and no worker outlives the command."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from _batchdata import descendants
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "massprops", "sweep", str(pendulum(tmp_path)), "--vary",
+         "bodies.rod.position[2]=uniform:-0.5:-0.2", "--samples", "100000", "--json",
+         "--jobs", "2", "--no-estimate"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        start_new_session=True, bufsize=0)
+    first = proc.stdout.readline()  # the sweep is running and has printed a row
+    helpers = descendants(proc.pid)
+    os.killpg(proc.pid, signal.SIGINT)
+    rest, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    lines = [json.loads(line) for line in (first + rest).decode().splitlines()]
+    rows, summary = lines[:-1], lines[-1]
+    assert [r["sample"] for r in rows] == list(range(len(rows))) and 1 <= len(rows) < 100000
+    assert summary["samples"] == len(rows) and summary["failed"] == 0
+    assert "interrupted" in err.decode()
+    deadline = time.monotonic() + 5
+    while [p for p in helpers if os.path.exists(f"/proc/{p}")
+           and open(f"/proc/{p}/stat").read().rsplit(")", 1)[1].split()[0] != "Z"]:
+        assert time.monotonic() < deadline, "a worker outlived the sweep"
+        time.sleep(0.05)

@@ -9,7 +9,7 @@ import json
 import os
 import re
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import click
@@ -345,3 +345,41 @@ def silence_stdout() -> None:
     """Point the closed stdout at /dev/null, so that the flush at exit does not fail again."""
     with contextlib.suppress(OSError, ValueError, AttributeError):  # no real descriptor
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+
+
+class CtrlC:
+    """Ctrl-C (SIGINT) as KeyboardInterrupt, except inside ``deferred()`` blocks, where it is
+    held until the block ends: a record is printed and counted whole or not taken at all."""
+
+    def __init__(self) -> None:
+        import signal
+        import threading
+
+        self.held = self.holding = False
+        self.previous = None
+        if threading.current_thread() is threading.main_thread():
+            self.previous = signal.signal(signal.SIGINT, self._handler)
+
+    def _handler(self, signum: int, frame: Any) -> None:
+        if self.holding:
+            self.held = True
+        else:
+            raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def deferred(self) -> Iterator[None]:
+        self.holding = True
+        try:
+            yield
+        finally:
+            self.holding = False
+        if self.held:
+            self.held = False
+            raise KeyboardInterrupt
+
+    def restore(self) -> None:
+        if self.previous is not None:
+            import signal
+
+            signal.signal(signal.SIGINT, self.previous)
+            self.previous = None

@@ -3,10 +3,9 @@ in input order as table, JSON, CSV or a robot format's inertial element."""
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +15,7 @@ from massprops.cli.app import cli
 from massprops.cli.common import (
     ELEMENT_FORMATS,
     INSPECT_FORMATS,
+    CtrlC,
     StdoutClosed,
     cli_text,
     element_comment,
@@ -220,7 +220,7 @@ def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool
         click.echo(f"massprops: {n}{of} files in {elapsed:.3g} s ({rate}): "
                    f"{counts['done']} done, {counts['failed']} failed", err=True)
 
-    ctrl_c = _CtrlC()
+    ctrl_c = CtrlC()
     try:
         with ctrl_c.deferred():
             if out_format == "csv":
@@ -251,44 +251,6 @@ def _report_batch(ctx: click.Context, batch: Any, out_format: str, summary: bool
             progress.close()
     say_summary(interrupted=False)
     return counts["worst"]
-
-
-class _CtrlC:
-    """Ctrl-C (SIGINT) as KeyboardInterrupt, except inside ``deferred()`` blocks, where it is
-    held until the block ends: a record is printed and counted whole or not taken at all."""
-
-    def __init__(self) -> None:
-        import signal
-        import threading
-
-        self.held = self.holding = False
-        self.previous = None
-        if threading.current_thread() is threading.main_thread():
-            self.previous = signal.signal(signal.SIGINT, self._handler)
-
-    def _handler(self, signum: int, frame: Any) -> None:
-        if self.holding:
-            self.held = True
-        else:
-            raise KeyboardInterrupt
-
-    @contextlib.contextmanager
-    def deferred(self) -> Iterator[None]:
-        self.holding = True
-        try:
-            yield
-        finally:
-            self.holding = False
-        if self.held:
-            self.held = False
-            raise KeyboardInterrupt
-
-    def restore(self) -> None:
-        if self.previous is not None:
-            import signal
-
-            signal.signal(signal.SIGINT, self.previous)
-            self.previous = None
 
 
 class RemoteError(Exception):

@@ -9,7 +9,7 @@ from typing import Any
 import click
 
 from massprops.cli.app import cli
-from massprops.cli.common import emit_json, guarded, say_note
+from massprops.cli.common import CtrlC, emit_json, guarded, say_note
 from massprops.cli.dynamics import method_options
 
 _ROWS_EXTENSIONS = {"csv": (".csv",), "json": (".jsonl", ".json")}
@@ -133,15 +133,15 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
                        outputs=outputs.split(",") if outputs else None, options=options,
                        bars=bars, series=plot_path is not None, jobs=jobs,
                        scheduler=scheduler, notice=say_note) as sweeping:
-                lines, interrupted = _rows(sweeping, rows_format,
-                                           fmt is not None and not output_path, quiet)
+                rows, lines, interrupted = _rows(sweeping, rows_format,
+                                                 fmt is not None and not output_path, quiet)
         finally:
             end_helper_processes()
         state["interrupted"] = interrupted
         prepared = sweeping.prepared
-        result = sweeping.summary(linear=linear and not interrupted)
+        result = sweeping.summary(rows, linear=linear and not interrupted)
         if plot_path:
-            sweeping.plot(plot_path, force=force, protect=protect)
+            sweeping.plot(rows, plot_path, force=force, protect=protect)
         # the summary: after JSON rows, in their stream; on stderr beside CSV rows; as a table
         # when no format was asked for (the rows then only in --output)
         if output_path:
@@ -170,30 +170,46 @@ def sweep(ctx: click.Context, scene_path: str, varies: tuple[str, ...], samples:
     ctx.exit(code)
 
 
-def _rows(sweeping: Any, rows_format: str, echo: bool, quiet: bool) -> tuple[list[str], bool]:
-    """Run ``sweeping``: (its rows' lines in ``rows_format``, whether Ctrl-C stopped it); each
-    line printed as its row comes where ``echo``."""
+def _rows(sweeping: Any, rows_format: str, echo: bool,
+          quiet: bool) -> tuple[list, list[str], bool]:
+    """Run ``sweeping``: (the rows taken, their lines in ``rows_format``, whether Ctrl-C stopped
+    it); each line printed as its row comes where ``echo``. A row is taken whole or not at all:
+    Ctrl-C waits while one is printed and counted (`CtrlC`), so the summary counts exactly the
+    rows shown."""
     from massprops.sweep import table as csv_table  # deferred: with the command's imports
 
     prepared = sweeping.prepared
+    rows: list = []
     lines = [csv_table.csv_line(csv_table.header(prepared))] if rows_format == "csv" else []
     if echo and lines:
         click.echo(lines[0])
     counter = _Counter(prepared.plan.count, not quiet and sys.stderr.isatty())
-    rows = sweeping.rows()
+    ctrl_c = CtrlC()
+    taking = sweeping.rows()
+    interrupted = False
     try:
-        for row in rows:
-            counter.step()
-            lines.append(csv_table.csv_line(csv_table.cells(prepared, row))
-                         if rows_format == "csv" else _json_line(row.as_dict()))
-            if echo:
-                click.echo(lines[-1])
-    except KeyboardInterrupt:
-        return lines, True
+        try:
+            for row in taking:
+                with ctrl_c.deferred():
+                    line = (csv_table.csv_line(csv_table.cells(prepared, row))
+                            if rows_format == "csv" else _json_line(row.as_dict()))
+                    if echo:
+                        click.echo(line)
+                    lines.append(line)
+                    rows.append(row)
+                    counter.step()
+        except KeyboardInterrupt:
+            interrupted = True
+        finally:
+            try:
+                with ctrl_c.deferred():  # a second Ctrl-C waits until the workers are stopped
+                    taking.close()
+                    counter.close()
+            except KeyboardInterrupt:
+                interrupted = True
     finally:
-        rows.close()
-        counter.close()
-    return lines, False
+        ctrl_c.restore()
+    return rows, lines, interrupted
 
 
 def _json_line(obj: dict) -> str:

@@ -36,7 +36,6 @@ class Sweep:
         elif jobs is not None and jobs > 1:
             self._pool = self.executor = start_pool(jobs)
             self.workers = jobs
-        self.done: list[Row] = []
         try:
             self.prepared: Prepared = prepare(path, varies, samples=samples, seed=seed,
                                               outputs=outputs, options=options, series=series,
@@ -63,30 +62,26 @@ class Sweep:
             self._pool = None
 
     def rows(self) -> Generator[Row, None, None]:
-        """Every sample's row in sample order, each kept in ``done`` as it comes; closing the
-        generator (Ctrl-C in the caller) stops the samples still running."""
-        sweeping = run_sweep(self.prepared, jobs=self.jobs, executor=self.executor,
-                             workers=self.workers)
-        try:
-            for row in sweeping:
-                self.done.append(row)
-                yield row
-        finally:
-            sweeping.close()
+        """Every sample's row in sample order; closing the generator (Ctrl-C in the caller)
+        stops the samples still running. The caller keeps the rows it took (only it knows which
+        it has reported when Ctrl-C comes) and hands them to `summary`."""
+        return run_sweep(self.prepared, jobs=self.jobs, executor=self.executor,
+                         workers=self.workers)
 
-    def summary(self, *, linear: bool = False) -> dict[str, Any]:
-        """The contract's summary of the rows done; with ``linear``, `linear.linearize`'s
+    def summary(self, rows: Sequence[Row], *, linear: bool = False) -> dict[str, Any]:
+        """The contract's summary of ``rows``; with ``linear``, `linear.linearize`'s
         derivatives under ``"linear"``."""
         plan = self.prepared.plan
-        result = summarize(self.done, plan.outputs, [key for key, _ in plan.value_keys])
+        result = summarize(rows, plan.outputs, [key for key, _ in plan.value_keys])
         if linear:
             from massprops.sweep.linear import linearize  # deferred: only --linear
 
             result["linear"] = linearize(plan)
         return result
 
-    def plot(self, path: str | Path, *, force: bool = False, protect=()) -> None:
-        """The rows' outputs over time (`plots.plot_sweep`; the sweep was made with series)."""
+    def plot(self, rows: Sequence[Row], path: str | Path, *, force: bool = False,
+             protect=()) -> None:
+        """``rows``' outputs over time (`plots.plot_sweep`; the sweep was made with series)."""
         from massprops.sweep.plots import plot_sweep  # deferred: matplotlib
 
-        plot_sweep(self.done, self.prepared.plan.outputs, path, force=force, protect=protect)
+        plot_sweep(rows, self.prepared.plan.outputs, path, force=force, protect=protect)
