@@ -249,7 +249,6 @@ class _Follow:
         """(y, motor (nv,), the motor at the coarse spline's accelerations or None) at sample i;
         the reactions into ``force``, ``torque``."""
         from massprops.dynamics.systems import tree as tr  # deferred: as the caller
-        from massprops.dynamics.systems.holding import motor_forces
         from massprops.dynamics.systems.loops import terms
         from massprops.dynamics.systems.outputs import reactions
         from massprops.dynamics.systems.system import Solution
@@ -291,24 +290,24 @@ class _Follow:
                 acc[self.dependent] = np.linalg.lstsq(
                     gd, -gdot - g[:, self.index] @ acc[self.index], rcond=None)[0]
         q, u = y[:nq], y[nq:]
-        motor, lam = self._motors(t, q, u, udot, g)
+        motor, lam, kin = self._motors(t, q, u, udot, g)
         other = None
         if np.any(coarse != udot):
-            other, _ = self._motors(t, q, u, coarse, g)
-        _, kin, _ = motor_forces(system, t, q, u, udot)
+            other, _, _ = self._motors(t, q, u, coarse, g)
         sol = Solution(udot, lam, len(lam), kin, *rho)
         reactions(system, t, y, sol, force, torque, motor)
         self.y = y
         return y, motor, other
 
-    def _motors(self, t: float, q, u, udot, g) -> tuple[np.ndarray, np.ndarray]:
-        """(motor (nv,), λ (m,)): M u̇ + h − τ = motor + Gᵀλ, the motors on the driven
-        coordinates only where there are loops (else on every one)."""
+    def _motors(self, t: float, q, u, udot, g):
+        """(motor (nv,), λ (m,), the kinematics at these accelerations): M u̇ + h − τ =
+        motor + Gᵀλ, the motors on the driven coordinates only where there are loops (else on
+        every one)."""
         from massprops.dynamics.systems.holding import motor_forces  # deferred: as the caller
 
-        needed, _, _ = motor_forces(self.system, t, q, u, udot)
+        needed, kin, _ = motor_forces(self.system, t, q, u, udot)
         if not len(g):
-            return needed, np.zeros(0)
+            return needed, np.zeros(0), kin
         nv = self.system.nv
         select = np.zeros((nv, len(self.index)))
         select[self.index, np.arange(len(self.index))] = 1.0
@@ -318,7 +317,7 @@ class _Follow:
             self.redundant = True
         motor = np.zeros(nv)
         motor[self.index] = x[:len(self.index)]
-        return motor, x[len(self.index):]
+        return motor, x[len(self.index):], kin
 
     def by_joint(self, y: np.ndarray, values: np.ndarray) -> list[np.ndarray]:
         """Tree values (nv,) per scene joint, in the scene's signs (`holding.by_scene_joint`)."""
